@@ -1,0 +1,25 @@
+// The yardstick: the same voxels coded by Google's Draco (libdraco, in-process).
+//
+// Positions go in as integer voxel coordinates and colors as 8-bit RGB, so Draco codes exactly
+// what we code, losslessly. Draco has no single "best" setting, so every encoding method
+// (sequential, kd-tree) and speed 0-10 is tried and the smallest result kept; the winner is decoded
+// again to check it really is lossless.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "pointdag/voxelize/voxelizer.h"
+
+namespace pointdag {
+
+struct DracoResult {
+  size_t bytes = 0;
+  double bits_per_point = 0;
+  std::string method;  // "kd-tree" or "sequential"
+  int speed = 0;
+};
+
+StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid);
+
+}  // namespace pointdag

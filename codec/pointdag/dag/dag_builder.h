@@ -1,0 +1,49 @@
+// Stage 4b: building the SVDAG (Paper I, hash-based, with Paper IIA/IIB counts).
+//
+// How: voxels arrive sorted by Morton code, so the octree is walked bottom-up in one streaming
+// pass without ever materialising the SVO. Each finished subtree gets a 64-bit hash computed from
+// its contents (a brick's 64-bit mask; a node's mask and its children's hashes, as in Paper I,
+// fig. 10) and is interned: a hash hit is only a candidate, confirmed by comparing the mask and
+// the children's canonical ids, which for already-unique children is a full subtree comparison.
+// A hash collision can therefore cost time, never correctness. A final top-down pass from the root
+// emits the unique nodes breadth-first in first-seen order, which makes the output canonical:
+// the same voxels give the same arrays whichever way they were built.
+//
+// Merge (Paper I): sub-DAGs of disjoint spatial chunks are interned into one builder in a single
+// sweep over their nodes, bottom-up; their roots then join the streaming pass as ordinary
+// subtrees. BuildDagChunked() uses this to keep only one chunk's temporaries alive at a time.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "pointdag/dag/svdag.h"
+
+namespace pointdag {
+
+struct DagBuildOptions {
+  CountMode mode = CountMode::kLeaves;
+  // Bits of the subtree hash that are kept. Tests narrow it to force collisions; results must not
+  // change, only speed.
+  uint64_t hash_mask = ~uint64_t{0};
+};
+
+// DAG of sorted, unique Morton codes on a grid of 2^depth per side (depth 2..21).
+StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagBuildOptions& options = {});
+
+// A sub-DAG whose root is the cell `prefix` (its Morton code on level depth - dag->depth).
+struct PlacedSubdag {
+  const Svdag* dag = nullptr;
+  uint64_t prefix = 0;
+};
+
+// Merges sub-DAGs of disjoint cells, in increasing prefix order, all of the same depth and mode,
+// into the DAG of the whole depth-`depth` grid.
+StatusOr<Svdag> MergeSubdags(std::span<const PlacedSubdag> parts, int depth, const DagBuildOptions& options = {});
+
+// Same result as BuildDag(), built chunk by chunk: the grid is cut into the 8^chunk_levels cells
+// of level chunk_levels, each built as its own sub-DAG and merged in at once.
+StatusOr<Svdag> BuildDagChunked(std::span<const uint64_t> morton, int depth, int chunk_levels,
+                                const DagBuildOptions& options = {});
+
+}  // namespace pointdag

@@ -1,0 +1,374 @@
+#include "pointdag/dag/dag_stream.h"
+
+#include <zstd.h>
+
+#include <array>
+#include <bit>
+#include <memory>
+#include <string>
+
+#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/varint.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+constexpr uint8_t kStreamVersion = 1;
+constexpr int kZstdLevel = 19;
+
+// Mask contexts: internal nodes by height (3..21), brick cell masks, and brick voxel masks by the
+// cell they fill (a surface crosses each of the 8 cells of a brick in its own typical way).
+constexpr int kBrickCellClass = 2;
+constexpr int kVoxelClassBase = 22;
+constexpr int kMaskClasses = kVoxelClassBase + 8;
+
+int InternalClass(const Svdag& dag, int level) { return dag.depth - level; }
+
+size_t RecordSize(const Svdag& dag, size_t word) {
+  return 1 + static_cast<size_t>(std::popcount(static_cast<unsigned>(dag.Mask(static_cast<uint32_t>(word)))));
+}
+
+uint64_t RecordCount(const Svdag& dag, int level) {
+  uint64_t n = 0;
+  for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1]; w += RecordSize(dag, w)) ++n;
+  return n;
+}
+
+// ---- Symbol sinks and sources: the traversal is written once per direction, the coding twice. ----
+
+class ZstdSink {
+ public:
+  void Mask(int, uint8_t m) { masks_.push_back(m); }
+  void Flag(int, bool back) {
+    if (flag_bits_ % 8 == 0) flags_.push_back(0);
+    if (back) flags_.back() = static_cast<uint8_t>(flags_.back() | (1u << (flag_bits_ % 8)));
+    ++flag_bits_;
+  }
+  void Ref(uint32_t ordinal, uint32_t) { PutVarint(refs_, ordinal); }
+
+  StatusOr<std::vector<uint8_t>> Finish(std::vector<uint8_t> out) {
+    std::array<std::vector<uint8_t>*, 3> streams = {&masks_, &flags_, &refs_};
+    std::vector<std::vector<uint8_t>> packed;
+    for (auto* s : streams) {
+      std::vector<uint8_t> z(ZSTD_compressBound(s->size()));
+      const size_t n = ZSTD_compress(z.data(), z.size(), s->data(), s->size(), kZstdLevel);
+      if (ZSTD_isError(n)) return Internal(std::string("zstd: ") + ZSTD_getErrorName(n));
+      z.resize(n);
+      PutVarint(out, n);
+      packed.push_back(std::move(z));
+    }
+    for (auto& z : packed) out.insert(out.end(), z.begin(), z.end());
+    return out;
+  }
+
+ private:
+  std::vector<uint8_t> masks_, flags_, refs_;
+  uint64_t flag_bits_ = 0;
+};
+
+// Streams a zstd frame out, growing the output only as real data arrives, so a frame that lies
+// about its size cannot make us allocate more than its bytes can expand to (or `limit`).
+Status Decompress(std::span<const uint8_t> frame, uint64_t limit, std::vector<uint8_t>& out) {
+  std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
+  ZSTD_inBuffer in = {frame.data(), frame.size(), 0};
+  std::vector<uint8_t> chunk(ZSTD_DStreamOutSize());
+  size_t last = 1;
+  while (in.pos < in.size || last != 0) {
+    ZSTD_outBuffer o = {chunk.data(), chunk.size(), 0};
+    last = ZSTD_decompressStream(ctx.get(), &o, &in);
+    if (ZSTD_isError(last)) return Corrupt(std::string("geometry stream fails to decompress: ") + ZSTD_getErrorName(last));
+    out.insert(out.end(), chunk.data(), chunk.data() + o.pos);
+    if (out.size() > limit) return Corrupt("geometry stream holds more data than the DAG can need");
+    if (o.pos == 0 && in.pos == in.size && last != 0) return Truncated("geometry stream's zstd frame is cut short");
+  }
+  return Status::Ok();
+}
+
+class ZstdSource {
+ public:
+  // Decompresses the three streams that follow `pos`; `limit` caps each stream's size.
+  Status Open(std::span<const uint8_t> bytes, size_t pos, uint64_t limit) {
+    uint64_t lengths[3];
+    for (auto& len : lengths) {
+      if (!GetVarint(bytes, pos, len)) return Truncated("geometry stream ends inside its length table");
+    }
+    std::vector<uint8_t>* streams[3] = {&masks_, &flags_, &refs_};
+    for (int i = 0; i < 3; ++i) {
+      if (lengths[i] > bytes.size() - pos) return Truncated("geometry stream is shorter than its length table says");
+      RETURN_IF_ERROR(Decompress(bytes.subspan(pos, lengths[i]), limit, *streams[i]));
+      pos += lengths[i];
+    }
+    return Status::Ok();
+  }
+  uint8_t Mask(int) { return mask_pos_ < masks_.size() ? masks_[mask_pos_++] : Fail(); }
+  bool Flag(int) {
+    if (flag_bit_ / 8 >= flags_.size()) return Fail();
+    const bool back = (flags_[flag_bit_ / 8] >> (flag_bit_ % 8)) & 1u;
+    ++flag_bit_;
+    return back;
+  }
+  uint32_t Ref(uint32_t) {
+    uint64_t v = 0;
+    if (!GetVarint(refs_, ref_pos_, v) || v > 0xFFFFFFFFu) return Fail();
+    return static_cast<uint32_t>(v);
+  }
+  bool failed() const { return failed_; }
+
+ private:
+  uint8_t Fail() {
+    failed_ = true;
+    return 0;
+  }
+  std::vector<uint8_t> masks_, flags_, refs_;
+  size_t mask_pos_ = 0, ref_pos_ = 0;
+  uint64_t flag_bit_ = 0;
+  bool failed_ = false;
+};
+
+// Probability models shared by the context encoder and decoder.
+struct ContextModels {
+  std::array<std::array<BitModel, 256>, kMaskClasses> mask;  // bit-tree: node 1..255
+  std::array<BitModel, kMaskClasses> flag;
+};
+
+class ContextSink {
+ public:
+  void Mask(int cls, uint8_t m) {
+    uint32_t node = 1;
+    for (int i = 7; i >= 0; --i) {
+      const int bit = (m >> i) & 1;
+      rc_.Encode(models_.mask[cls][node], bit);
+      node = node << 1 | static_cast<uint32_t>(bit);
+    }
+  }
+  void Flag(int cls, bool back) { rc_.Encode(models_.flag[cls], back ? 1 : 0); }
+  void Ref(uint32_t ordinal, uint32_t bound) { rc_.EncodeDirect(ordinal, std::bit_width(bound - 1)); }
+  StatusOr<std::vector<uint8_t>> Finish(std::vector<uint8_t> out) {
+    const std::vector<uint8_t> payload = rc_.Finish();
+    out.insert(out.end(), payload.begin(), payload.end());
+    return out;
+  }
+
+ private:
+  ContextModels models_;
+  BinaryRangeEncoder rc_;
+};
+
+class ContextSource {
+ public:
+  explicit ContextSource(std::span<const uint8_t> payload) : rc_(payload) {}
+  uint8_t Mask(int cls) {
+    uint32_t node = 1;
+    for (int i = 0; i < 8; ++i) node = node << 1 | static_cast<uint32_t>(rc_.Decode(models_.mask[cls][node]));
+    return static_cast<uint8_t>(node);
+  }
+  bool Flag(int cls) { return rc_.Decode(models_.flag[cls]) != 0; }
+  uint32_t Ref(uint32_t bound) { return rc_.DecodeDirect(std::bit_width(bound - 1)); }
+  bool failed() const { return rc_.overrun(); }
+
+ private:
+  ContextModels models_;
+  BinaryRangeDecoder rc_;
+};
+
+// ---- Encoder traversal ----
+
+template <typename Sink>
+Status WriteSymbols(const Svdag& dag, Sink& sink) {
+  const int levels = dag.internal_levels();
+  // Ordinal of every record start, so references can be told apart as new or repeated.
+  std::vector<uint32_t> ordinal(dag.nodes.size(), 0);
+  for (int level = 0; level < levels; ++level) {
+    uint32_t k = 0;
+    for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1]; w += RecordSize(dag, w)) ordinal[w] = k++;
+  }
+  for (int level = 0; level < levels; ++level) {
+    const int cls = InternalClass(dag, level);
+    const bool children_are_leaves = level + 1 == levels;
+    uint32_t seen = 0;  // nodes of the next level referenced so far
+    for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1];) {
+      const uint8_t mask = dag.Mask(static_cast<uint32_t>(w));
+      sink.Mask(cls, mask);
+      const int n = std::popcount(static_cast<unsigned>(mask));
+      for (int i = 0; i < n; ++i) {
+        const uint32_t ref = dag.nodes[w + 1 + i];
+        const uint32_t k = children_are_leaves ? ref : ordinal[ref];
+        if (k > seen) return Internal("DAG is not in canonical breadth-first order");
+        if (seen > 0) sink.Flag(cls, k < seen);
+        if (k < seen) {
+          sink.Ref(k, seen);
+        } else {
+          ++seen;
+        }
+      }
+      w += 1 + static_cast<size_t>(n);
+    }
+    const uint64_t next_level = children_are_leaves ? dag.leaves.size() : RecordCount(dag, level + 1);
+    if (seen != next_level) return Internal("DAG holds nodes unreachable from its root");
+  }
+  for (uint64_t brick : dag.leaves) {
+    uint8_t cells = 0;
+    for (int c = 0; c < 8; ++c) cells = static_cast<uint8_t>(cells | (((brick >> (8 * c)) & 0xFFu) ? 1u << c : 0u));
+    sink.Mask(kBrickCellClass, cells);
+    for (int c = 0; c < 8; ++c) {
+      if ((cells >> c) & 1u) sink.Mask(kVoxelClassBase + c, static_cast<uint8_t>(brick >> (8 * c)));
+    }
+  }
+  return Status::Ok();
+}
+
+// ---- Decoder traversal ----
+
+template <typename Source>
+StatusOr<Svdag> ReadSymbols(Source& source, int depth, CountMode mode, const std::vector<uint64_t>& counts) {
+  Svdag dag;
+  dag.depth = depth;
+  dag.mode = mode;
+  const int levels = dag.internal_levels();
+  std::vector<std::vector<uint8_t>> masks(levels);
+  std::vector<std::vector<uint32_t>> children(levels);  // child ordinals, level by level
+  for (int level = 0; level < levels; ++level) {
+    const int cls = InternalClass(dag, level);
+    uint32_t seen = 0;
+    for (uint64_t i = 0; i < counts[level]; ++i) {
+      const uint8_t mask = source.Mask(cls);
+      if (mask == 0 || source.failed()) return Corrupt("geometry stream holds an empty or missing node mask");
+      masks[level].push_back(mask);
+      for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
+        uint32_t k;
+        if (seen > 0 && source.Flag(cls)) {
+          k = source.Ref(seen);
+          if (k >= seen) return Corrupt("geometry stream refers to a node not yet seen");
+        } else {
+          k = seen++;
+          if (seen > counts[level + 1]) return Corrupt("geometry stream holds more nodes than its header declares");
+        }
+        children[level].push_back(k);
+      }
+    }
+    if (seen != counts[level + 1]) return Corrupt("geometry stream holds fewer nodes than its header declares");
+  }
+  for (uint64_t i = 0; i < counts[levels]; ++i) {
+    const uint8_t cells = source.Mask(kBrickCellClass);
+    if (cells == 0) return Corrupt("geometry stream holds an empty brick");
+    uint64_t brick = 0;
+    for (int c = 0; c < 8; ++c) {
+      if (!((cells >> c) & 1u)) continue;
+      const uint8_t voxels = source.Mask(kVoxelClassBase + c);
+      if (voxels == 0) return Corrupt("geometry stream holds an empty brick cell");
+      brick |= uint64_t{voxels} << (8 * c);
+    }
+    dag.leaves.push_back(brick);
+  }
+  if (source.failed()) return Truncated("geometry stream ends early");
+
+  // Counts bottom-up, then word addresses and records top-down.
+  std::vector<std::vector<uint64_t>> count(levels);
+  for (int level = levels - 1; level >= 0; --level) {
+    count[level].resize(masks[level].size());
+    size_t child = 0;
+    for (size_t i = 0; i < masks[level].size(); ++i) {
+      uint64_t sum = mode == CountMode::kMipmap ? 1 : 0;
+      for (int c = std::popcount(static_cast<unsigned>(masks[level][i])); c > 0; --c, ++child) {
+        const uint32_t k = children[level][child];
+        if (level + 1 == levels) {
+          sum += mode == CountMode::kMipmap ? BrickMipCount(dag.leaves[k]) : BrickVoxelCount(dag.leaves[k]);
+        } else {
+          sum += count[level + 1][k];
+        }
+      }
+      count[level][i] = sum;
+    }
+  }
+  std::vector<std::vector<uint32_t>> address(levels);
+  uint64_t word = 0;
+  for (int level = 0; level < levels; ++level) {
+    dag.level_offsets.push_back(static_cast<uint32_t>(word));
+    for (uint8_t mask : masks[level]) {
+      address[level].push_back(static_cast<uint32_t>(word));
+      word += 1 + static_cast<uint64_t>(std::popcount(static_cast<unsigned>(mask)));
+      if (word > 0xFFFFFFFFull) return ResourceLimit("decoded DAG exceeds 2^32 node words");
+    }
+  }
+  if (levels > 0) dag.level_offsets.push_back(static_cast<uint32_t>(word));
+  dag.nodes.reserve(word);
+  for (int level = 0; level < levels; ++level) {
+    size_t child = 0;
+    for (size_t i = 0; i < masks[level].size(); ++i) {
+      uint32_t field;
+      if (dag.IsUpperLevel(level)) {
+        if (count[level][i] > 0xFFFFFFFFull) return ResourceLimit("decoded DAG holds more than 2^32 voxels");
+        field = static_cast<uint32_t>(dag.upper_counts.size());
+        dag.upper_counts.push_back(static_cast<uint32_t>(count[level][i]));
+      } else {
+        field = static_cast<uint32_t>(count[level][i]);
+      }
+      dag.nodes.push_back(uint32_t{masks[level][i]} << 24 | field);
+      for (int c = std::popcount(static_cast<unsigned>(masks[level][i])); c > 0; --c, ++child) {
+        const uint32_t k = children[level][child];
+        dag.nodes.push_back(level + 1 == levels ? k : address[level + 1][k]);
+      }
+    }
+  }
+  return dag;
+}
+
+}  // namespace
+
+const char* GeometryCoderName(GeometryCoder coder) {
+  return coder == GeometryCoder::kZstd ? "zstd" : "context";
+}
+
+StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) {
+  RETURN_IF_ERROR(dag.Validate());
+  std::vector<uint8_t> out = {kStreamVersion, static_cast<uint8_t>(coder), static_cast<uint8_t>(dag.depth),
+                              static_cast<uint8_t>(dag.mode)};
+  // Node count of every level (bricks last): bounds the decoder's allocations before it starts.
+  for (int level = 0; level < dag.internal_levels(); ++level) PutVarint(out, RecordCount(dag, level));
+  PutVarint(out, dag.leaves.size());
+  if (coder == GeometryCoder::kZstd) {
+    ZstdSink sink;
+    RETURN_IF_ERROR(WriteSymbols(dag, sink));
+    return sink.Finish(std::move(out));
+  }
+  ContextSink sink;
+  RETURN_IF_ERROR(WriteSymbols(dag, sink));
+  return sink.Finish(std::move(out));
+}
+
+StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
+  if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
+  if (bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[1] > 1) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
+  const auto coder = static_cast<GeometryCoder>(bytes[1]);
+  const int depth = bytes[2];
+  if (depth < 2 || depth > kMaxDepth) return Corrupt("geometry stream depth " + std::to_string(depth) + " is outside 2..21");
+  if (bytes[3] > 1) return Corrupt("geometry stream names unknown count mode " + std::to_string(bytes[3]));
+  const auto mode = static_cast<CountMode>(bytes[3]);
+
+  size_t pos = 4;
+  std::vector<uint64_t> counts(static_cast<size_t>(depth - 2) + 1);
+  uint64_t total = 0;
+  for (auto& c : counts) {
+    if (!GetVarint(bytes, pos, c)) return Truncated("geometry stream ends inside its level table");
+    total += c;
+    if (c == 0 || total > max_nodes) return Corrupt("geometry stream declares an impossible node count");
+  }
+  if (counts[0] != 1) return Corrupt("geometry stream must have exactly one root");
+
+  StatusOr<Svdag> dag = Corrupt("unreachable");
+  if (coder == GeometryCoder::kZstd) {
+    ZstdSource source;
+    RETURN_IF_ERROR(source.Open(bytes, pos, total * 48 + 64));
+    dag = ReadSymbols(source, depth, mode, counts);
+  } else {
+    ContextSource source(bytes.subspan(pos));
+    dag = ReadSymbols(source, depth, mode, counts);
+  }
+  if (!dag.ok()) return dag.status();
+  RETURN_IF_ERROR(dag->Validate());
+  return dag;
+}
+
+}  // namespace pointdag

@@ -1,0 +1,129 @@
+// Adaptive binary range coder: the carry-less scheme used by LZMA (Subbotin / Pavlov), with 12-bit
+// probabilities that adapt by 1/32 per coded bit. Context models live in the caller: one
+// BitModel per context. The decoder never reads past its input: missing bytes read as zero, so
+// corrupt input decodes to garbage that the caller's structural checks reject, never to a crash.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace pointdag {
+
+struct BitModel {
+  uint16_t p0 = 2048;  // probability of a 0 bit, in 1/4096
+};
+
+class BinaryRangeEncoder {
+ public:
+  void Encode(BitModel& m, int bit) {
+    const uint32_t bound = (range_ >> 12) * m.p0;
+    if (bit == 0) {
+      range_ = bound;
+      m.p0 = static_cast<uint16_t>(m.p0 + ((4096 - m.p0) >> kAdapt));
+    } else {
+      low_ += bound;
+      range_ -= bound;
+      m.p0 = static_cast<uint16_t>(m.p0 - (m.p0 >> kAdapt));
+    }
+    Normalize();
+  }
+  // Equiprobable bits, for values with no useful model (back-reference ordinals).
+  void EncodeDirect(uint32_t value, int bits) {
+    for (int i = bits - 1; i >= 0; --i) {
+      range_ >>= 1;
+      if ((value >> i) & 1u) low_ += range_;
+      Normalize();
+    }
+  }
+  std::vector<uint8_t> Finish() {
+    for (int i = 0; i < 5; ++i) ShiftLow();
+    return std::move(out_);
+  }
+
+ private:
+  static constexpr int kAdapt = 5;
+  void Normalize() {
+    while (range_ < (1u << 24)) {
+      range_ <<= 8;
+      ShiftLow();
+    }
+  }
+  void ShiftLow() {
+    if (static_cast<uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {
+      const uint8_t carry = static_cast<uint8_t>(low_ >> 32);
+      uint8_t pending = cache_;
+      do {
+        out_.push_back(static_cast<uint8_t>(pending + carry));
+        pending = 0xFF;
+      } while (--cache_size_ != 0);
+      cache_ = static_cast<uint8_t>(low_ >> 24);
+    }
+    ++cache_size_;
+    low_ = (low_ & 0x00FFFFFFu) << 8;
+  }
+
+  uint64_t low_ = 0;
+  uint32_t range_ = 0xFFFFFFFFu;
+  uint8_t cache_ = 0;
+  uint64_t cache_size_ = 1;
+  std::vector<uint8_t> out_;
+};
+
+class BinaryRangeDecoder {
+ public:
+  explicit BinaryRangeDecoder(std::span<const uint8_t> in) : in_(in) {
+    for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
+  }
+  int Decode(BitModel& m) {
+    const uint32_t bound = (range_ >> 12) * m.p0;
+    int bit;
+    if (code_ < bound) {
+      range_ = bound;
+      m.p0 = static_cast<uint16_t>(m.p0 + ((4096 - m.p0) >> kAdapt));
+      bit = 0;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      m.p0 = static_cast<uint16_t>(m.p0 - (m.p0 >> kAdapt));
+      bit = 1;
+    }
+    Normalize();
+    return bit;
+  }
+  uint32_t DecodeDirect(int bits) {
+    uint32_t value = 0;
+    for (int i = 0; i < bits; ++i) {
+      range_ >>= 1;
+      const uint32_t bit = code_ >= range_ ? 1u : 0u;
+      if (bit) code_ -= range_;
+      value = value << 1 | bit;
+      Normalize();
+    }
+    return value;
+  }
+  // True once the decoder has wanted more bytes than the input had: the stream was truncated.
+  bool overrun() const { return overrun_ > 4; }
+
+ private:
+  static constexpr int kAdapt = 5;
+  uint8_t Next() {
+    if (pos_ < in_.size()) return in_[pos_++];
+    ++overrun_;
+    return 0;
+  }
+  void Normalize() {
+    while (range_ < (1u << 24)) {
+      range_ <<= 8;
+      code_ = code_ << 8 | Next();
+    }
+  }
+
+  std::span<const uint8_t> in_;
+  size_t pos_ = 0;
+  size_t overrun_ = 0;
+  uint32_t code_ = 0;
+  uint32_t range_ = 0xFFFFFFFFu;
+};
+
+}  // namespace pointdag

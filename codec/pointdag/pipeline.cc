@@ -1,0 +1,126 @@
+#include "pointdag/pipeline.h"
+
+#include <chrono>
+
+#include "pointdag/dag/dag_builder.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+nlohmann::json DescribeCrs(const ScanInfo& scan) {
+  nlohmann::json crs = {{"wkt", scan.crs_wkt}};
+  if (scan.geokeys) {
+    nlohmann::json keys = nlohmann::json::array();
+    for (const GeoKey& k : scan.geokeys->keys) keys.push_back({k.id, k.location, k.count, k.value});
+    crs["geokeys"] = {{"keys", keys}, {"doubles", scan.geokeys->doubles}, {"ascii", scan.geokeys->ascii}};
+    // GeoTIFF: ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048); 32767 means user-defined.
+    for (const GeoKey& k : scan.geokeys->keys) {
+      if ((k.id == 3072 || k.id == 2048) && k.location == 0 && k.value != 32767 && k.value != 0) crs["epsg"] = k.value;
+    }
+  }
+  return crs;
+}
+
+// Reads a required member of the metadata, or explains which one is missing.
+template <typename T>
+Status Require(const nlohmann::json& meta, const char* key, T& out) {
+  const auto it = meta.find(key);
+  if (it == meta.end()) return Corrupt(std::string(".pdag metadata lacks '") + key + "'");
+  if constexpr (std::is_same_v<T, double>) {
+    if (!it->is_number()) return Corrupt(std::string(".pdag metadata '") + key + "' is not a number");
+  } else {
+    if (!it->is_number_integer()) return Corrupt(std::string(".pdag metadata '") + key + "' is not an integer");
+  }
+  out = it->get<T>();
+  return Status::Ok();
+}
+
+}  // namespace
+
+nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
+                            const Svdag& dag, GeometryCoder coder) {
+  const double side = grid.voxel_size * std::ldexp(1.0, grid.depth);
+  nlohmann::json source = {{"name", source_name},
+                           {"format", ScanFormatName(scan.format)},
+                           {"version", scan.format_version},
+                           {"points", grid.points_in},
+                           {"color_bits", grid.has_color() ? grid.source_color_bits : 0}};
+  if (scan.las_point_format >= 0) source["las_point_format"] = scan.las_point_format;
+  return {
+      {"generator", "pointdag 0.1.0"},
+      {"source", source},
+      {"crs", DescribeCrs(scan)},
+      {"depth", grid.depth},
+      {"voxel_size", grid.voxel_size},
+      {"origin", grid.origin},
+      {"grid_bounds", {{"min", grid.origin},
+                       {"max", {grid.origin[0] + side, grid.origin[1] + side, grid.origin[2] + side}}}},
+      {"voxels", grid.morton.size()},
+      {"unique_nodes", dag.UniqueNodeCount()},
+      {"has_color", grid.has_color()},
+      {"codec", {{"geometry", GeometryCoderName(coder)},
+                 {"count_mode", dag.mode == CountMode::kMipmap ? "mipmap" : "leaves"},
+                 {"colors", grid.has_color() ? "raw-rgb8" : "none"}}},
+  };
+}
+
+StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options) {
+  EncodedScan out;
+  auto start = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(std::unique_ptr<ScanReader> reader, OpenScan(input));
+  VoxelizeOptions vopt;
+  vopt.voxel_size = options.voxel_size;
+  vopt.depth = options.depth;
+  vopt.progress = options.progress;
+  ASSIGN_OR_RETURN(out.grid, Voxelize(*reader, vopt));
+  out.scan = reader->info();
+  out.seconds.read_voxelize = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(out.dag, BuildDag(out.grid.morton, out.grid.depth));
+  out.seconds.build = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));
+  out.file.meta = DescribeScan(input.filename().string(), out.scan, out.grid, out.dag, options.geometry_coder);
+  for (const Rgb8& c : out.grid.colors) out.file.colors.insert(out.file.colors.end(), {c.r, c.g, c.b});
+  out.seconds.encode = SecondsSince(start);
+  return out;
+}
+
+StatusOr<DecodedPdag> DecodePdag(const PdagFile& file) {
+  DecodedPdag out;
+  out.meta = file.meta;
+  uint64_t voxels = 0;
+  RETURN_IF_ERROR(Require(file.meta, "voxels", voxels));
+  RETURN_IF_ERROR(Require(file.meta, "depth", out.grid.depth));
+  RETURN_IF_ERROR(Require(file.meta, "voxel_size", out.grid.voxel_size));
+  const auto origin = file.meta.find("origin");
+  if (origin == file.meta.end() || !origin->is_array() || origin->size() != 3 ||
+      !std::all_of(origin->begin(), origin->end(), [](const auto& v) { return v.is_number(); })) {
+    return Corrupt(".pdag metadata 'origin' is not three numbers");
+  }
+  out.grid.origin = origin->get<std::array<double, 3>>();
+  // Every unique node has a voxel below it on each level: that bounds what a lying header may ask for.
+  if (out.grid.depth < 2 || out.grid.depth > kMaxDepth) return Corrupt(".pdag metadata depth is outside 2..21");
+  ASSIGN_OR_RETURN(out.dag, DecodeDag(file.geometry, voxels * static_cast<uint64_t>(out.grid.depth) + 64));
+  if (out.dag.depth != out.grid.depth) return Corrupt(".pdag metadata depth disagrees with its geometry");
+  out.grid.morton = out.dag.MortonCodes();
+  if (out.grid.morton.size() != voxels) return Corrupt(".pdag metadata voxel count disagrees with its geometry");
+  out.grid.points_in = out.meta.value("/source/points"_json_pointer, uint64_t{0});
+  if (!file.colors.empty()) {
+    if (file.colors.size() != 3 * voxels) return Corrupt(".pdag colors section does not hold one RGB per voxel");
+    out.grid.colors.resize(voxels);
+    for (size_t i = 0; i < voxels; ++i) {
+      out.grid.colors[i] = {file.colors[3 * i], file.colors[3 * i + 1], file.colors[3 * i + 2]};
+    }
+  }
+  return out;
+}
+
+}  // namespace pointdag

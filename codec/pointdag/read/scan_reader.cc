@@ -1,0 +1,66 @@
+#include "pointdag/read/scan_reader.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "pointdag/read/las_reader.h"
+#include "pointdag/read/pcl_reader.h"
+
+namespace pointdag {
+
+const char* ScanFormatName(ScanFormat format) {
+  switch (format) {
+    case ScanFormat::kLas: return "LAS";
+    case ScanFormat::kPly: return "PLY";
+    case ScanFormat::kPcd: return "PCD";
+  }
+  return "?";
+}
+
+StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return IoError("cannot open " + path.string());
+  char magic[16] = {};
+  const size_t got = std::fread(magic, 1, sizeof(magic), f);
+  std::fclose(f);
+  if (got >= 4 && std::memcmp(magic, "LASF", 4) == 0) return LasReader::Open(path);  // LAZ is refused inside
+  if (got >= 4 && std::memcmp(magic, "ply", 3) == 0 && (magic[3] == '\n' || magic[3] == '\r')) {
+    return OpenPclScan(path, ScanFormat::kPly);
+  }
+  // PCD files open with a comment line or directly with VERSION/FIELDS.
+  if (got >= 5 && (std::memcmp(magic, "# .PCD", 6) == 0 || std::memcmp(magic, "VERSION", 7) == 0 ||
+                   std::memcmp(magic, "FIELDS", 6) == 0)) {
+    return OpenPclScan(path, ScanFormat::kPcd);
+  }
+  if (got == 0) return Malformed(path.string() + " is empty");
+  return Unsupported(path.string() + " is not a LAS, PLY or PCD scan (unrecognised first bytes)");
+}
+
+StatusOr<ScanSurvey> SurveyScan(ScanReader& reader, size_t batch_points) {
+  ScanSurvey survey;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  survey.bounds.min = {inf, inf, inf};
+  survey.bounds.max = {-inf, -inf, -inf};
+  RETURN_IF_ERROR(reader.Rewind());
+  PointBatch batch;
+  for (;;) {
+    ASSIGN_OR_RETURN(size_t n, reader.Read(batch, batch_points));
+    if (n == 0) break;
+    for (const auto& p : batch.xyz) {
+      for (int axis = 0; axis < 3; ++axis) {
+        survey.bounds.min[axis] = std::min(survey.bounds.min[axis], p[axis]);
+        survey.bounds.max[axis] = std::max(survey.bounds.max[axis], p[axis]);
+      }
+    }
+    survey.points += n;
+  }
+  if (survey.points == 0) return Malformed("the scan holds zero points");
+  survey.has_color = reader.info().has_color;
+  survey.color_bits = reader.max_color_seen() <= 255 ? 8 : reader.info().stored_color_bits;
+  RETURN_IF_ERROR(reader.Rewind());
+  return survey;
+}
+
+}  // namespace pointdag

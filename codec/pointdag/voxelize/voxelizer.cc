@@ -1,0 +1,126 @@
+#include "pointdag/voxelize/voxelizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+struct KeyedPoint {
+  uint64_t key;
+  std::array<uint16_t, 3> rgb;
+};
+
+// LSD radix sort on the low `bits` bits of the key, 11 bits a pass: sorting dominates voxelizing,
+// and a comparison sort of millions of 16-byte records is several times slower on one core.
+void RadixSortByKey(std::vector<KeyedPoint>& points, int bits) {
+  constexpr int kRadixBits = 11;
+  constexpr size_t kBuckets = size_t{1} << kRadixBits;
+  std::vector<KeyedPoint> scratch(points.size());
+  for (int shift = 0; shift < bits; shift += kRadixBits) {
+    std::vector<size_t> offsets(kBuckets + 1, 0);
+    for (const auto& p : points) ++offsets[((p.key >> shift) & (kBuckets - 1)) + 1];
+    for (size_t b = 1; b <= kBuckets; ++b) offsets[b] += offsets[b - 1];
+    for (const auto& p : points) scratch[offsets[(p.key >> shift) & (kBuckets - 1)]++] = p;
+    points.swap(scratch);
+  }
+}
+
+}  // namespace
+
+std::array<double, 3> VoxelGrid::VoxelCentre(uint64_t code) const {
+  const auto cell = MortonDecode(code);
+  return {origin[0] + (cell[0] + 0.5) * voxel_size, origin[1] + (cell[1] + 0.5) * voxel_size,
+          origin[2] + (cell[2] + 0.5) * voxel_size};
+}
+
+StatusOr<int> DepthForVoxelSize(double extent, double voxel_size) {
+  if (!std::isfinite(voxel_size) || voxel_size <= 0) {
+    return InvalidArgument("voxel size must be a positive finite number");
+  }
+  const double cells = std::floor(extent / voxel_size) + 1;  // the maximum point needs a cell too
+  int depth = 2;
+  while (depth <= kMaxDepth && std::ldexp(1.0, depth) < cells) ++depth;
+  if (depth > kMaxDepth) {
+    return InvalidArgument("voxel size " + std::to_string(voxel_size) + " is too small for an extent of " +
+                           std::to_string(extent) + ": the grid would need more than 2^21 voxels per side");
+  }
+  return depth;
+}
+
+StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options) {
+  if (options.voxel_size.has_value() == options.depth.has_value()) {
+    return InvalidArgument("give exactly one of voxel size and depth");
+  }
+  ASSIGN_OR_RETURN(ScanSurvey survey, SurveyScan(reader, options.batch_points));
+
+  VoxelGrid grid;
+  grid.origin = survey.bounds.min;
+  grid.points_in = survey.points;
+  grid.source_color_bits = survey.color_bits;
+  double extent = 0;
+  for (int axis = 0; axis < 3; ++axis) extent = std::max(extent, survey.bounds.max[axis] - survey.bounds.min[axis]);
+
+  if (options.depth) {
+    if (*options.depth < 2 || *options.depth > kMaxDepth) {
+      return InvalidArgument("depth must be between 2 and 21, got " + std::to_string(*options.depth));
+    }
+    grid.depth = *options.depth;
+    grid.voxel_size = extent > 0 ? extent / std::ldexp(1.0, grid.depth) : 1.0;
+  } else {
+    ASSIGN_OR_RETURN(grid.depth, DepthForVoxelSize(extent, *options.voxel_size));
+    grid.voxel_size = *options.voxel_size;
+  }
+
+  std::vector<KeyedPoint> points;
+  points.reserve(static_cast<size_t>(survey.points));
+  const uint32_t max_cell = (uint32_t{1} << grid.depth) - 1;
+  const double inv_size = 1.0 / grid.voxel_size;
+  PointBatch batch;
+  for (;;) {
+    ASSIGN_OR_RETURN(size_t n, reader.Read(batch, options.batch_points));
+    if (n == 0) break;
+    for (size_t i = 0; i < n; ++i) {
+      uint32_t cell[3];
+      for (int axis = 0; axis < 3; ++axis) {
+        const double c = std::floor((batch.xyz[i][axis] - grid.origin[axis]) * inv_size);
+        cell[axis] = static_cast<uint32_t>(std::clamp(c, 0.0, static_cast<double>(max_cell)));
+      }
+      points.push_back({MortonEncode(cell[0], cell[1], cell[2]),
+                        survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}});
+    }
+    if (options.progress) options.progress(points.size(), survey.points);
+  }
+  if (points.size() != survey.points) {
+    return Internal("scan yielded " + std::to_string(points.size()) + " points on its second pass, " +
+                    std::to_string(survey.points) + " on its first");
+  }
+  RadixSortByKey(points, 3 * grid.depth);
+
+  // One voxel per run of equal keys; its color is the rounded mean, scaled to 8 bits.
+  const double to_8bit = survey.color_bits > 8 ? 1.0 / 257.0 : 1.0;
+  for (size_t begin = 0; begin < points.size();) {
+    size_t end = begin + 1;
+    while (end < points.size() && points[end].key == points[begin].key) ++end;
+    grid.morton.push_back(points[begin].key);
+    if (survey.has_color) {
+      uint64_t sum[3] = {0, 0, 0};
+      for (size_t i = begin; i < end; ++i) {
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += points[i].rgb[ch];
+      }
+      const double n = static_cast<double>(end - begin);
+      uint8_t mean[3];
+      for (int ch = 0; ch < 3; ++ch) {
+        mean[ch] = static_cast<uint8_t>(std::clamp(std::round(static_cast<double>(sum[ch]) / n * to_8bit), 0.0, 255.0));
+      }
+      grid.colors.push_back({mean[0], mean[1], mean[2]});
+    }
+    begin = end;
+  }
+  return grid;
+}
+
+}  // namespace pointdag

@@ -1,0 +1,55 @@
+// Stage 3: quantize a scan onto a cubic grid of 2^depth voxels per side.
+//
+// Contract: the grid's origin is the scan's exact minimum corner (found by a first pass, never from
+// a header) and its side is the largest extent. Given --voxel S, depth is the smallest in [2, 21]
+// whose grid covers the extent; given --depth D the voxel size is extent / 2^D. All points of one
+// voxel become one voxel whose color is the rounded mean of their colors, in 8 bits (16-bit sources
+// are scaled, 8-bit values stored in 16-bit fields are kept). Voxels come out sorted by Morton code,
+// which is also the DAG's color order.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "pointdag/read/scan_reader.h"
+
+namespace pointdag {
+
+struct Rgb8 {
+  uint8_t r = 0, g = 0, b = 0;
+  friend bool operator==(const Rgb8&, const Rgb8&) = default;
+};
+
+// Called now and then with (points done, points total) for progress display.
+using ProgressFn = std::function<void(uint64_t, uint64_t)>;
+
+struct VoxelizeOptions {
+  std::optional<double> voxel_size;  // exactly one of voxel_size and depth
+  std::optional<int> depth;
+  size_t batch_points = 1 << 16;
+  ProgressFn progress;
+};
+
+struct VoxelGrid {
+  int depth = 0;
+  std::array<double, 3> origin{0, 0, 0};  // world position of the grid's minimum corner
+  double voxel_size = 1.0;
+  std::vector<uint64_t> morton;  // sorted, unique
+  std::vector<Rgb8> colors;      // parallel to morton; empty when the scan has no color
+  uint64_t points_in = 0;
+  int source_color_bits = 8;
+
+  bool has_color() const { return !colors.empty(); }
+  // Centre of a voxel in source units.
+  std::array<double, 3> VoxelCentre(uint64_t code) const;
+};
+
+// Chooses the depth for a voxel size over an extent; kInvalidArgument if it needs more than 21 levels.
+StatusOr<int> DepthForVoxelSize(double extent, double voxel_size);
+
+StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options);
+
+}  // namespace pointdag

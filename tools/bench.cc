@@ -1,0 +1,159 @@
+#include "bench.h"
+
+#include <sys/utsname.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "pointdag/compare/draco_compare.h"
+#include "pointdag/pipeline.h"
+
+namespace pointdag {
+namespace {
+
+// Two voxel sizes per known scan (in the scan's own units), the first as in ARCHITECTURE.md's table.
+const std::map<std::string, std::pair<double, double>> kVoxelSizes = {
+    {"lion_takanawa_pdrf7_rgb.las", {0.01, 0.005}},
+    {"autzen_trim_pdrf3_rgb.las", {4.0, 2.0}},
+    {"autzen_trim_las14_pdrf7_rgb.las", {4.0, 2.0}},
+    {"pcx_guanyin_cc-by-4.0_rgb.ply", {0.002, 0.001}},
+    {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", {0.5, 0.25}},
+    {"pcl_milk_cartoon_clorox_kinect_rgb.ply", {0.004, 0.002}},
+    {"lone_star_tls_noRGB.las", {0.05, 0.02}},
+    {"tiny_1.2-with-color_1065pts.las", {8.0, 4.0}},
+};
+
+// Resident set size now and its high-water mark, in bytes (from /proc/self/status).
+std::pair<uint64_t, uint64_t> RssAndPeak() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  uint64_t rss = 0, peak = 0;
+  while (status >> key) {
+    uint64_t kb = 0;
+    if (key == "VmRSS:" && status >> kb) rss = kb * 1024;
+    if (key == "VmHWM:" && status >> kb) peak = kb * 1024;
+  }
+  return {rss, peak};
+}
+
+nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
+  const uint64_t baseline = RssAndPeak().first;
+  EncodeOptions options;
+  options.voxel_size = voxel;
+  auto encoded = EncodeScan(scan, options);
+  if (!encoded.ok()) return {{"error", encoded.status().ToString()}};
+  const uint64_t peak = RssAndPeak().second;
+  auto zstd_stream = EncodeDag(encoded->dag, GeometryCoder::kZstd);
+  auto draco = DracoEncodeVoxels(encoded->grid);
+  const double points = static_cast<double>(encoded->grid.points_in);
+  const double voxels = static_cast<double>(encoded->grid.morton.size());
+  const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
+  const auto& s = encoded->seconds;
+  return {
+      {"scan", scan.filename().string()},
+      {"voxel", voxel},
+      {"points", encoded->grid.points_in},
+      {"voxels", encoded->grid.morton.size()},
+      {"depth", encoded->grid.depth},
+      {"read_voxelize_points_per_s", points / s.read_voxelize},
+      {"build_points_per_s", points / s.build},
+      {"read_voxelize_build_points_per_s", points / (s.read_voxelize + s.build)},
+      {"peak_rss_bytes", peak},
+      {"peak_rss_over_baseline_bytes", peak - baseline},
+      {"raw_point_bytes", std::filesystem::file_size(scan)},
+      {"resident_bits_per_voxel", bpv(encoded->dag.ResidentBytes())},
+      {"stored_zstd_bits_per_voxel", zstd_stream.ok() ? bpv(zstd_stream->size()) : -1.0},
+      {"stored_context_bits_per_voxel", bpv(encoded->file.geometry.size())},
+      {"draco_bits_per_point", draco.ok() ? draco->bits_per_point : -1.0},
+  };
+}
+
+// Each case runs in its own child process so that peak RSS is that case's alone.
+nlohmann::json RunCaseIsolated(const std::filesystem::path& scan, double voxel) {
+  int fds[2];
+  if (pipe(fds) != 0) return {{"error", "pipe failed"}};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    const std::string line = RunCase(scan, voxel).dump();
+    [[maybe_unused]] const ssize_t n = write(fds[1], line.data(), line.size());
+    close(fds[1]);
+    _exit(0);
+  }
+  close(fds[1]);
+  std::string text;
+  char buf[4096];
+  for (ssize_t n; (n = read(fds[0], buf, sizeof(buf))) > 0;) text.append(buf, static_cast<size_t>(n));
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  auto result = nlohmann::json::parse(text, nullptr, false);
+  if (result.is_discarded()) return {{"scan", scan.filename().string()}, {"error", "benchmark child crashed"}};
+  return result;
+}
+
+std::string MachineName() {
+  utsname u{};
+  uname(&u);
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line, model = "unknown CPU";
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  return model + ", " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores, " + u.sysname + " " + u.machine;
+}
+
+}  // namespace
+
+int RunBench(const BenchOptions& options) {
+  std::vector<std::filesystem::path> scans;
+  for (const auto& entry : std::filesystem::directory_iterator(options.data_dir)) {
+    const auto ext = entry.path().extension().string();
+    if (ext == ".las" || ext == ".ply" || ext == ".pcd") scans.push_back(entry.path());
+  }
+  std::sort(scans.begin(), scans.end());
+  if (!options.json) {
+    std::printf("machine: %s; one core (the codec core is single-threaded)\n", MachineName().c_str());
+    std::printf("| scan | voxel | points | voxels | read+vox Mpt/s | build Mpt/s | read+vox+build Mpt/s | peak RSS MiB (net) | raw MiB "
+                "| resident b/vox | stored zstd b/vox | stored ctx b/vox | Draco b/pt |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  }
+  for (const auto& scan : scans) {
+    const auto it = kVoxelSizes.find(scan.filename().string());
+    if (it == kVoxelSizes.end()) continue;
+    for (double voxel : {it->second.first, it->second.second}) {
+      const nlohmann::json r = RunCaseIsolated(scan, voxel);
+      if (options.json) {
+        std::cout << r.dump() << std::endl;
+        continue;
+      }
+      if (r.contains("error")) {
+        std::printf("| %s | %g | error: %s |\n", scan.filename().c_str(), voxel, r["error"].get<std::string>().c_str());
+        continue;
+      }
+      const auto mib = [](const nlohmann::json& v) { return v.get<double>() / (1024.0 * 1024.0); };
+      std::printf("| %s | %g | %llu | %llu | %.2f | %.2f | %.2f | %.1f (%.1f) | %.1f | %.2f | %.3f | %.3f | %.2f |\n",
+                  scan.filename().c_str(), voxel, r["points"].get<unsigned long long>(),
+                  r["voxels"].get<unsigned long long>(), r["read_voxelize_points_per_s"].get<double>() / 1e6,
+                  r["build_points_per_s"].get<double>() / 1e6, r["read_voxelize_build_points_per_s"].get<double>() / 1e6,
+                  mib(r["peak_rss_bytes"]), mib(r["peak_rss_over_baseline_bytes"]), mib(r["raw_point_bytes"]),
+                  r["resident_bits_per_voxel"].get<double>(), r["stored_zstd_bits_per_voxel"].get<double>(),
+                  r["stored_context_bits_per_voxel"].get<double>(), r["draco_bits_per_point"].get<double>());
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+}  // namespace pointdag

@@ -1,0 +1,217 @@
+// pointdag: the codec on the command line.
+//   pointdag encode IN -o OUT.pdag (--voxel SIZE | --depth D) [--coder context|zstd]
+//   pointdag decode IN.pdag -o OUT.ply
+//   pointdag info IN.pdag [--json]
+//   pointdag compare IN (--voxel SIZE | --depth D) [--json]
+//   pointdag bench [--data DIR] [--json]
+// Exit codes: 0 ok, 1 bad input (message on stderr), 2 usage.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+
+#include "bench.h"
+#include "pointdag/compare/draco_compare.h"
+#include "pointdag/pipeline.h"
+#include "pointdag/write/ply_writer.h"
+#include "progress.h"
+
+namespace pointdag {
+namespace {
+
+constexpr int kExitBadInput = 1;
+
+int Fail(const Status& status) {
+  std::cerr << "pointdag: " << status.ToString() << "\n";
+  return kExitBadInput;
+}
+
+struct GridChoice {
+  std::optional<double> voxel;
+  std::optional<int> depth;
+};
+
+void AddGridOptions(CLI::App* cmd, GridChoice& choice) {
+  auto* voxel = cmd->add_option("--voxel", choice.voxel, "voxel size in the scan's units")->check(CLI::PositiveNumber);
+  auto* depth = cmd->add_option("--depth", choice.depth, "grid depth: 2^D voxels per side")->check(CLI::Range(2, 21));
+  voxel->excludes(depth);
+  depth->excludes(voxel);
+}
+
+EncodeOptions MakeEncodeOptions(const GridChoice& choice, const std::string& input) {
+  EncodeOptions options;
+  options.voxel_size = choice.voxel;
+  options.depth = choice.depth;
+  options.progress = MakeProgressBar(input);
+  return options;
+}
+
+int RunEncode(const std::string& input, const std::string& output, const GridChoice& choice, GeometryCoder coder) {
+  EncodeOptions options = MakeEncodeOptions(choice, input);
+  options.geometry_coder = coder;
+  auto encoded = EncodeScan(input, options);
+  if (!encoded.ok()) return Fail(encoded.status());
+  if (Status s = WritePdag(output, encoded->file); !s.ok()) return Fail(s);
+  const double voxels = static_cast<double>(encoded->grid.morton.size());
+  std::fprintf(stderr, "%s: %llu points -> %zu voxels (depth %d, voxel %.6g), geometry %.3f bits/voxel, colors %.2f bits/voxel\n",
+               output.c_str(), static_cast<unsigned long long>(encoded->grid.points_in), encoded->grid.morton.size(),
+               encoded->grid.depth, encoded->grid.voxel_size, 8.0 * static_cast<double>(encoded->file.geometry.size()) / voxels,
+               8.0 * static_cast<double>(encoded->file.colors.size()) / voxels);
+  return 0;
+}
+
+int RunDecode(const std::string& input, const std::string& output) {
+  auto file = ReadPdag(input);
+  if (!file.ok()) return Fail(file.status());
+  auto decoded = DecodePdag(*file);
+  if (!decoded.ok()) return Fail(decoded.status());
+  if (Status s = WriteVoxelsPly(output, decoded->grid); !s.ok()) return Fail(s);
+  std::fprintf(stderr, "%s: %zu voxels\n", output.c_str(), decoded->grid.morton.size());
+  return 0;
+}
+
+int RunInfo(const std::string& input, bool json) {
+  auto bytes = ReadFileBytes(input);
+  if (!bytes.ok()) return Fail(bytes.status());
+  auto file = ParsePdag(*bytes);
+  if (!file.ok()) return Fail(file.status());
+  auto decoded = DecodePdag(*file);  // info vouches for the whole file, not just its header
+  if (!decoded.ok()) return Fail(decoded.status());
+  const size_t voxels = decoded->grid.morton.size();
+  nlohmann::json out = {
+      {"file_bytes", bytes->size()},
+      {"voxels", voxels},
+      {"depth", decoded->grid.depth},
+      {"voxel_size", decoded->grid.voxel_size},
+      {"unique_nodes", decoded->dag.UniqueNodeCount()},
+      {"sections", {{"meta", file->meta.dump().size()}, {"geometry", file->geometry.size()}, {"colors", file->colors.size()}}},
+      {"bits_per_voxel", {{"geometry", 8.0 * static_cast<double>(file->geometry.size()) / static_cast<double>(voxels)},
+                          {"colors", 8.0 * static_cast<double>(file->colors.size()) / static_cast<double>(voxels)},
+                          {"file", 8.0 * static_cast<double>(bytes->size()) / static_cast<double>(voxels)}}},
+      {"meta", file->meta},
+  };
+  if (json) {
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  const auto& m = file->meta;
+  std::printf("file        %s (%zu bytes)\n", input.c_str(), bytes->size());
+  std::printf("source      %s (%s %s), %s points\n", m.value("/source/name"_json_pointer, std::string("?")).c_str(),
+              m.value("/source/format"_json_pointer, std::string("?")).c_str(),
+              m.value("/source/version"_json_pointer, std::string("")).c_str(),
+              std::to_string(m.value("/source/points"_json_pointer, uint64_t{0})).c_str());
+  std::printf("grid        depth %d, voxel %.6g, origin (%.3f, %.3f, %.3f)\n", decoded->grid.depth,
+              decoded->grid.voxel_size, decoded->grid.origin[0], decoded->grid.origin[1], decoded->grid.origin[2]);
+  std::printf("voxels      %zu (%zu unique DAG nodes)\n", voxels, decoded->dag.UniqueNodeCount());
+  std::printf("geometry    %zu bytes, %.3f bits/voxel (%s)\n", file->geometry.size(),
+              out["bits_per_voxel"]["geometry"].get<double>(), m.value("/codec/geometry"_json_pointer, std::string("?")).c_str());
+  std::printf("colors      %zu bytes, %.3f bits/voxel (%s)\n", file->colors.size(),
+              out["bits_per_voxel"]["colors"].get<double>(), m.value("/codec/colors"_json_pointer, std::string("?")).c_str());
+  const std::string wkt = m.value("/crs/wkt"_json_pointer, std::string());
+  std::printf("crs         %s\n", wkt.empty() ? "none (local frame)" : (wkt.substr(0, 72) + (wkt.size() > 72 ? "..." : "")).c_str());
+  return 0;
+}
+
+int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
+  auto encoded = EncodeScan(input, MakeEncodeOptions(choice, input));
+  if (!encoded.ok()) return Fail(encoded.status());
+  auto zstd_stream = EncodeDag(encoded->dag, GeometryCoder::kZstd);
+  if (!zstd_stream.ok()) return Fail(zstd_stream.status());
+  auto draco = DracoEncodeVoxels(encoded->grid);
+  if (!draco.ok()) return Fail(draco.status());
+  const double voxels = static_cast<double>(encoded->grid.morton.size());
+  const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
+  const double geometry = bpv(std::min(encoded->file.geometry.size(), zstd_stream->size()));
+  const double colors = bpv(encoded->file.colors.size());
+  nlohmann::json out = {
+      {"input", input},
+      {"points", encoded->grid.points_in},
+      {"voxels", encoded->grid.morton.size()},
+      {"depth", encoded->grid.depth},
+      {"voxel_size", encoded->grid.voxel_size},
+      {"geometry_bits_per_voxel", geometry},
+      {"geometry", {{"resident_bits_per_voxel", bpv(encoded->dag.ResidentBytes())},
+                    {"stored_context_bits_per_voxel", bpv(encoded->file.geometry.size())},
+                    {"stored_zstd_bits_per_voxel", bpv(zstd_stream->size())},
+                    {"unique_nodes", encoded->dag.UniqueNodeCount()}}},
+      {"color_bits_per_voxel", colors},
+      {"total_bits_per_voxel", geometry + colors},
+      {"draco_bits_per_point", draco->bits_per_point},
+      {"draco", {{"bytes", draco->bytes}, {"method", draco->method}, {"speed", draco->speed}}},
+      {"ratio_draco_to_ours", draco->bits_per_point / (geometry + colors)},
+  };
+  if (json) {
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  std::printf("%s: %llu points -> %zu voxels (depth %d, voxel %.6g)\n", input.c_str(),
+              static_cast<unsigned long long>(encoded->grid.points_in), encoded->grid.morton.size(), encoded->grid.depth,
+              encoded->grid.voxel_size);
+  std::printf("  %-34s %10s\n", "", "bits/voxel");
+  std::printf("  %-34s %10.3f\n", "geometry, resident SVDAG", out["geometry"]["resident_bits_per_voxel"].get<double>());
+  std::printf("  %-34s %10.3f\n", "geometry, stored (zstd)", out["geometry"]["stored_zstd_bits_per_voxel"].get<double>());
+  std::printf("  %-34s %10.3f\n", "geometry, stored (context coder)", out["geometry"]["stored_context_bits_per_voxel"].get<double>());
+  std::printf("  %-34s %10.3f\n", "colors (raw RGB8)", colors);
+  std::printf("  %-34s %10.3f\n", "pointdag total", geometry + colors);
+  std::printf("  %-34s %10.3f  (%s, speed %d)\n", "Draco, lossless, same voxels", draco->bits_per_point,
+              draco->method.c_str(), draco->speed);
+  return 0;
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"pointdag: point clouds to compressed sparse voxel DAGs"};
+  app.require_subcommand(1);
+  std::string input, output;
+  GridChoice grid;
+  bool json = false;
+  std::string coder_name = "context";
+
+  auto* encode = app.add_subcommand("encode", "voxelize a scan (LAS/PLY/PCD) into a .pdag file");
+  encode->add_option("input", input, "scan file")->required();
+  encode->add_option("-o,--output", output, "output .pdag")->required();
+  AddGridOptions(encode, grid);
+  encode->add_option("--coder", coder_name, "geometry entropy coder")->check(CLI::IsMember({"context", "zstd"}));
+
+  auto* decode = app.add_subcommand("decode", "write a .pdag's voxels (centres + colors) as PLY");
+  decode->add_option("input", input, ".pdag file")->required();
+  decode->add_option("-o,--output", output, "output .ply")->required();
+
+  auto* info = app.add_subcommand("info", "describe a .pdag file");
+  info->add_option("input", input, ".pdag file")->required();
+  info->add_flag("--json", json, "print JSON");
+
+  auto* compare = app.add_subcommand("compare", "our sizes against Draco on the same voxels");
+  compare->add_option("input", input, "scan file")->required();
+  AddGridOptions(compare, grid);
+  compare->add_flag("--json", json, "print JSON");
+
+  BenchOptions bench_options;
+  auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
+  bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
+  bench->add_flag("--json", bench_options.json, "print JSON lines instead of a table");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  for (auto* cmd : {encode, compare}) {
+    if (cmd->parsed() && !grid.voxel && !grid.depth) {
+      std::cerr << "pointdag " << cmd->get_name() << ": give --voxel SIZE or --depth D\n";
+      return 2;
+    }
+  }
+  if (encode->parsed()) return RunEncode(input, output, grid, coder_name == "zstd" ? GeometryCoder::kZstd : GeometryCoder::kContext);
+  if (decode->parsed()) return RunDecode(input, output);
+  if (info->parsed()) return RunInfo(input, json);
+  if (compare->parsed()) return RunCompare(input, grid, json);
+  if (bench->parsed()) return RunBench(bench_options);
+  return 2;
+}
+
+}  // namespace
+}  // namespace pointdag
+
+int main(int argc, char** argv) { return pointdag::Main(argc, argv); }
