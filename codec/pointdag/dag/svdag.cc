@@ -101,6 +101,8 @@ void VisitVoxels(const Svdag& dag, uint32_t ref, int level, uint64_t prefix,
 
 }  // namespace
 
+uint64_t Svdag::RootCount() const { return RefCount(*this, 0, 0); }
+
 uint64_t Svdag::VoxelCount() const {
   if (mode == CountMode::kLeaves) return RefCount(*this, 0, 0);
   uint64_t n = 0;  // mipmap counts include internal nodes, so count the voxels themselves

@@ -47,7 +47,7 @@ struct Svdag {
     return IsUpperLevel(level) ? upper_counts[field] : field;
   }
   // Total voxels (leaf mode) or nodes + voxels (mipmap mode) below the root.
-  uint64_t RootCount() const { return Count(0, 0); }
+  uint64_t RootCount() const;
   uint64_t VoxelCount() const;
   size_t UniqueNodeCount() const;  // internal nodes + leaf bricks
 

@@ -10,22 +10,33 @@
 
 namespace pointdag {
 
+// Two estimates of P(bit = 0) in 1/65536, one adapting fast (1/16) and one slowly (1/128); their
+// mean tracks both short runs and long-term statistics better than either alone.
 struct BitModel {
-  uint16_t p0 = 2048;  // probability of a 0 bit, in 1/4096
+  uint16_t fast = 32768, slow = 32768;
+  uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }  // 12 bits, never 0
+  void Update(int bit) {
+    if (bit == 0) {
+      fast = static_cast<uint16_t>(fast + ((65536 - fast) >> 4));
+      slow = static_cast<uint16_t>(slow + ((65536 - slow) >> 7));
+    } else {
+      fast = static_cast<uint16_t>(fast - (fast >> 4));
+      slow = static_cast<uint16_t>(slow - (slow >> 7));
+    }
+  }
 };
 
 class BinaryRangeEncoder {
  public:
   void Encode(BitModel& m, int bit) {
-    const uint32_t bound = (range_ >> 12) * m.p0;
+    const uint32_t bound = (range_ >> 12) * m.P0();
     if (bit == 0) {
       range_ = bound;
-      m.p0 = static_cast<uint16_t>(m.p0 + ((4096 - m.p0) >> kAdapt));
     } else {
       low_ += bound;
       range_ -= bound;
-      m.p0 = static_cast<uint16_t>(m.p0 - (m.p0 >> kAdapt));
     }
+    m.Update(bit);
     Normalize();
   }
   // Equiprobable bits, for values with no useful model (back-reference ordinals).
@@ -42,7 +53,6 @@ class BinaryRangeEncoder {
   }
 
  private:
-  static constexpr int kAdapt = 5;
   void Normalize() {
     while (range_ < (1u << 24)) {
       range_ <<= 8;
@@ -76,18 +86,17 @@ class BinaryRangeDecoder {
     for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
   }
   int Decode(BitModel& m) {
-    const uint32_t bound = (range_ >> 12) * m.p0;
+    const uint32_t bound = (range_ >> 12) * m.P0();
     int bit;
     if (code_ < bound) {
       range_ = bound;
-      m.p0 = static_cast<uint16_t>(m.p0 + ((4096 - m.p0) >> kAdapt));
       bit = 0;
     } else {
       code_ -= bound;
       range_ -= bound;
-      m.p0 = static_cast<uint16_t>(m.p0 - (m.p0 >> kAdapt));
       bit = 1;
     }
+    m.Update(bit);
     Normalize();
     return bit;
   }
@@ -106,7 +115,6 @@ class BinaryRangeDecoder {
   bool overrun() const { return overrun_ > 4; }
 
  private:
-  static constexpr int kAdapt = 5;
   uint8_t Next() {
     if (pos_ < in_.size()) return in_[pos_++];
     ++overrun_;

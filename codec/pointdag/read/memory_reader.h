@@ -11,14 +11,15 @@ namespace pointdag {
 
 class MemoryScanReader final : public ScanReader {
  public:
-  // `rgb` is empty for a scan without color, else parallel to `xyz` (8-bit values).
+  // `rgb` is empty for a scan without color, else parallel to `xyz`: 16-bit fields, which like LAS
+  // may hold 8-bit values (the voxelizer tells which from the largest value).
   MemoryScanReader(std::vector<std::array<double, 3>> xyz, std::vector<std::array<uint16_t, 3>> rgb)
       : xyz_(std::move(xyz)), rgb_(std::move(rgb)) {
     info_.format = ScanFormat::kPly;
     info_.format_version = "memory";
     info_.point_count = xyz_.size();
     info_.has_color = !rgb_.empty();
-    info_.stored_color_bits = 8;
+    info_.stored_color_bits = 16;
   }
 
   StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override {

@@ -1,0 +1,121 @@
+#include <gtest/gtest.h>
+
+#include "pointdag/dag/dag_builder.h"
+#include "pointdag/dag/dag_stream.h"
+#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/varint.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+using testing::SurfaceVoxels;
+
+Svdag Build(int depth, size_t voxels, uint32_t seed, CountMode mode = CountMode::kLeaves) {
+  DagBuildOptions options;
+  options.mode = mode;
+  return BuildDag(SurfaceVoxels(depth, voxels, seed), depth, options).value();
+}
+
+TEST(BinaryRangeCoder, RoundTripsModelledAndDirectBits) {
+  std::mt19937 rng(1);
+  std::vector<int> bits(20000);
+  std::vector<uint32_t> direct(2000);
+  for (auto& b : bits) b = (rng() % 10) < 2;  // skewed: the model must learn it
+  for (auto& d : direct) d = rng() & 0x1FFF;
+  BinaryRangeEncoder enc;
+  BitModel models[4];
+  for (size_t i = 0; i < bits.size(); ++i) enc.Encode(models[i % 4], bits[i]);
+  for (uint32_t d : direct) enc.EncodeDirect(d, 13);
+  const auto bytes = enc.Finish();
+  EXPECT_LT(bytes.size(), 20000 / 8 * 0.8 + 2000 * 13 / 8 + 16);  // skewed bits cost < 0.8 bit each
+  BinaryRangeDecoder dec(bytes);
+  BitModel dmodels[4];
+  for (size_t i = 0; i < bits.size(); ++i) ASSERT_EQ(dec.Decode(dmodels[i % 4]), bits[i]) << i;
+  for (uint32_t d : direct) ASSERT_EQ(dec.DecodeDirect(13), d);
+  EXPECT_FALSE(dec.overrun());
+}
+
+struct StreamCase {
+  int depth;
+  CountMode mode;
+  GeometryCoder coder;
+};
+
+class DagStreamTest : public ::testing::TestWithParam<StreamCase> {};
+
+TEST_P(DagStreamTest, DecodesToTheIdenticalResidentDag) {
+  const auto [depth, mode, coder] = GetParam();
+  const Svdag dag = Build(depth, 20000, static_cast<uint32_t>(depth), mode);
+  auto bytes = EncodeDag(dag, coder);
+  ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+  auto decoded = DecodeDag(*bytes);
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  EXPECT_EQ(*decoded, dag);
+  // Far smaller than the resident form: no pointers for first-seen children.
+  if (depth >= 8) {
+    EXPECT_LT(bytes->size() * 2, dag.ResidentBytes());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, DagStreamTest,
+    ::testing::Values(StreamCase{2, CountMode::kLeaves, GeometryCoder::kZstd}, StreamCase{2, CountMode::kLeaves, GeometryCoder::kContext},
+                      StreamCase{3, CountMode::kMipmap, GeometryCoder::kContext}, StreamCase{6, CountMode::kLeaves, GeometryCoder::kZstd},
+                      StreamCase{10, CountMode::kLeaves, GeometryCoder::kZstd}, StreamCase{10, CountMode::kLeaves, GeometryCoder::kContext},
+                      StreamCase{10, CountMode::kMipmap, GeometryCoder::kZstd}, StreamCase{10, CountMode::kMipmap, GeometryCoder::kContext},
+                      StreamCase{16, CountMode::kLeaves, GeometryCoder::kContext}, StreamCase{21, CountMode::kLeaves, GeometryCoder::kZstd}));
+
+TEST(DagStream, RepeatedSubtreesBecomeBackReferences) {
+  std::vector<uint64_t> cube(4096);
+  for (uint64_t i = 0; i < cube.size(); ++i) cube[i] = i;
+  const Svdag dag = BuildDag(cube, 4).value();
+  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext}) {
+    auto bytes = EncodeDag(dag, coder);
+    ASSERT_TRUE(bytes.ok());
+    EXPECT_EQ(DecodeDag(*bytes).value(), dag);
+  }
+}
+
+// Corrupt or cut streams come back as errors, never as crashes or unbounded allocations.
+TEST(DagStream, SurvivesTruncationAndBitFlips) {
+  const Svdag dag = Build(9, 8000, 3);
+  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext}) {
+    const auto bytes = EncodeDag(dag, coder).value();
+    for (size_t len = 0; len < bytes.size(); len += 1 + bytes.size() / 300) {
+      auto cut = DecodeDag(std::span(bytes).first(len));
+      EXPECT_FALSE(cut.ok()) << GeometryCoderName(coder) << " decoded a stream cut at " << len;
+    }
+    std::mt19937 rng(7);
+    for (int trial = 0; trial < 300; ++trial) {
+      auto flipped = bytes;
+      flipped[rng() % flipped.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+      auto decoded = DecodeDag(flipped);
+      if (decoded.ok()) {
+        EXPECT_TRUE(decoded->Validate().ok());  // a flip may still decode to some valid DAG
+      }
+    }
+  }
+}
+
+TEST(DagStream, RejectsLyingHeaders) {
+  const auto good = EncodeDag(Build(6, 2000, 4), GeometryCoder::kContext).value();
+  auto bad = good;
+  bad[0] = 9;  // version
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  bad = good;
+  bad[1] = 7;  // coder
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  bad = good;
+  bad[2] = 30;  // depth
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  // A level table claiming 2^40 nodes is refused before anything is allocated.
+  std::vector<uint8_t> huge = {1, 1, 6, 0, 1};
+  PutVarint(huge, uint64_t{1} << 40);
+  EXPECT_EQ(DecodeDag(huge).status().code(), StatusCode::kCorrupt);
+  EXPECT_EQ(DecodeDag(good, 10).status().code(), StatusCode::kCorrupt);  // caller's own bound
+  EXPECT_EQ(DecodeDag(std::vector<uint8_t>{1, 0}).status().code(), StatusCode::kTruncated);
+}
+
+}  // namespace
+}  // namespace pointdag

@@ -1,0 +1,140 @@
+#include <gtest/gtest.h>
+
+#include "pointdag/dag/dag_builder.h"
+#include "pointdag/pipeline.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+using testing::DataDir;
+
+struct ScanCase {
+  const char* file;
+  double voxel;
+};
+
+const ScanCase kScans[] = {
+    {"tiny_1.2-with-color_1065pts.las", 4.0},
+    {"autzen_trim_pdrf3_rgb.las", 4.0},
+    {"autzen_trim_las14_pdrf7_rgb.las", 2.0},
+    {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", 0.25},
+    {"lion_takanawa_pdrf7_rgb.las", 0.01},
+    {"lone_star_tls_noRGB.las", 0.05},
+    {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.002},
+    {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 0.004},
+};
+
+class PipelineTest : public ::testing::TestWithParam<ScanCase> {};
+
+// voxelize -> DAG -> stored form -> container bytes -> resident -> voxels: exactly the same.
+TEST_P(PipelineTest, RoundTripIsExact) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = GetParam().voxel;
+  for (GeometryCoder coder : {GeometryCoder::kContext, GeometryCoder::kZstd}) {
+    options.geometry_coder = coder;
+    auto encoded = EncodeScan(DataDir() / GetParam().file, options);
+    ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+    const auto bytes = SerializePdag(encoded->file);
+    auto parsed = ParsePdag(bytes);
+    ASSERT_TRUE(parsed.ok()) << parsed.status().ToString();
+    auto decoded = DecodePdag(*parsed);
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_EQ(decoded->dag, encoded->dag);
+    EXPECT_EQ(decoded->grid.morton, encoded->grid.morton);
+    EXPECT_EQ(decoded->grid.colors, encoded->grid.colors);
+    EXPECT_EQ(decoded->grid.depth, encoded->grid.depth);
+    EXPECT_EQ(decoded->grid.origin, encoded->grid.origin);  // JSON doubles round-trip exactly
+    EXPECT_EQ(decoded->grid.voxel_size, encoded->grid.voxel_size);
+    EXPECT_EQ(decoded->meta["voxels"], encoded->grid.morton.size());
+  }
+}
+
+TEST_P(PipelineTest, ChunkedBuildEqualsOneGoBuild) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = GetParam().voxel;
+  auto encoded = EncodeScan(DataDir() / GetParam().file, options);
+  ASSERT_TRUE(encoded.ok());
+  auto chunked = BuildDagChunked(encoded->grid.morton, encoded->grid.depth, 2);
+  ASSERT_TRUE(chunked.ok());
+  EXPECT_EQ(*chunked, encoded->dag);
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(kScans), [](const auto& param_info) {
+  std::string name = param_info.param.file;
+  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return name;
+});
+
+TEST(Pipeline, MetadataCarriesSourceCrsAndCodec) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  auto encoded = EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  ASSERT_TRUE(encoded.ok());
+  const auto& meta = encoded->file.meta;
+  EXPECT_EQ(meta["source"]["format"], "LAS");
+  EXPECT_EQ(meta["source"]["points"], 110000);
+  EXPECT_EQ(meta["source"]["color_bits"], 8);
+  EXPECT_NE(meta["crs"]["wkt"].get<std::string>().find("Lambert_Conformal_Conic"), std::string::npos);
+  EXPECT_EQ(meta["crs"]["geokeys"]["keys"].size(), 21u);
+  EXPECT_FALSE(meta["crs"].contains("epsg"));  // the GeoKeys say user-defined (32767)
+  EXPECT_EQ(meta["codec"]["geometry"], "context");
+  EXPECT_EQ(meta["voxels"], 36931);
+  EXPECT_EQ(meta["depth"], 9);
+}
+
+// Like zstd's regression test: compressed sizes of a fixed scan at a fixed setting. When this
+// fails, the change altered the format or its efficiency: update the numbers deliberately.
+TEST(Pipeline, CompressedSizesAreStable) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  auto encoded = EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  ASSERT_TRUE(encoded.ok());
+  EXPECT_EQ(encoded->file.geometry.size(), 10202u);
+  EXPECT_EQ(EncodeDag(encoded->dag, GeometryCoder::kZstd)->size(), 10408u);
+  EXPECT_EQ(encoded->dag.ResidentBytes(), 33972u);
+  EXPECT_EQ(SerializePdag(encoded->file).size(), 122794u);
+}
+
+TEST(Pipeline, DecodeRejectsMetadataThatContradictsTheData) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 8.0;
+  auto encoded = EncodeScan(DataDir() / "tiny_1.2-with-color_1065pts.las", options);
+  ASSERT_TRUE(encoded.ok());
+  PdagFile file = encoded->file;
+  file.meta["voxels"] = file.meta["voxels"].get<uint64_t>() + 1;
+  EXPECT_EQ(DecodePdag(file).status().code(), StatusCode::kCorrupt);
+  file = encoded->file;
+  file.meta["depth"] = 12;
+  EXPECT_EQ(DecodePdag(file).status().code(), StatusCode::kCorrupt);
+  file = encoded->file;
+  file.meta.erase("origin");
+  EXPECT_EQ(DecodePdag(file).status().code(), StatusCode::kCorrupt);
+  file = encoded->file;
+  file.colors.pop_back();
+  EXPECT_EQ(DecodePdag(file).status().code(), StatusCode::kCorrupt);
+  file = encoded->file;
+  file.meta["voxels"] = "many";
+  EXPECT_EQ(DecodePdag(file).status().code(), StatusCode::kCorrupt);
+}
+
+TEST(Pipeline, LazInputIsRefusedWithAReason) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir dir;
+  auto bytes = testing::ReadBytes(DataDir() / "tiny_1.2-with-color_1065pts.las");
+  bytes[104] |= 0x80;
+  testing::WriteBytes(dir / "x.laz", bytes);
+  EncodeOptions options;
+  options.depth = 8;
+  const auto status = EncodeScan(dir / "x.laz", options).status();
+  EXPECT_EQ(status.code(), StatusCode::kUnsupported);
+  EXPECT_NE(status.message().find("LAZ"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pointdag

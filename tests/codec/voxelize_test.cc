@@ -1,0 +1,130 @@
+#include <gtest/gtest.h>
+
+#include "pointdag/read/memory_reader.h"
+#include "pointdag/voxelize/morton.h"
+#include "pointdag/voxelize/voxelizer.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+TEST(Morton, RoundTripsAndInterleavesXHighest) {
+  EXPECT_EQ(MortonEncode(1, 0, 0), 4u);
+  EXPECT_EQ(MortonEncode(0, 1, 0), 2u);
+  EXPECT_EQ(MortonEncode(0, 0, 1), 1u);
+  EXPECT_EQ(MortonEncode(2, 0, 0), 32u);
+  const uint32_t max = (1u << 21) - 1;
+  EXPECT_EQ(MortonEncode(max, max, max), (uint64_t{1} << 63) - 1);
+  std::mt19937 rng(5);
+  for (int i = 0; i < 10000; ++i) {
+    const uint32_t x = rng() & max, y = rng() & max, z = rng() & max;
+    EXPECT_EQ(MortonDecode(MortonEncode(x, y, z)), (std::array<uint32_t, 3>{x, y, z}));
+  }
+}
+
+StatusOr<VoxelGrid> VoxelizeInMemory(std::vector<std::array<double, 3>> xyz, std::vector<std::array<uint16_t, 3>> rgb,
+                        VoxelizeOptions options) {
+  MemoryScanReader reader(std::move(xyz), std::move(rgb));
+  return Voxelize(reader, options);
+}
+
+TEST(Voxelizer, MergesPointsOfAVoxelWithTheirMeanColor) {
+  VoxelizeOptions options;
+  options.voxel_size = 1.0;
+  // Bounds 0..3: depth 2 (4 cells per side). Two points share cell (0,0,0); one is in (3,3,3).
+  auto grid = VoxelizeInMemory({{0.0, 0.2, 0.3}, {0.9, 0.0, 0.0}, {3.0, 3.0, 3.0}}, {{10, 20, 30}, {21, 40, 255}, {1, 2, 3}}, options);
+  ASSERT_TRUE(grid.ok()) << grid.status().ToString();
+  EXPECT_EQ(grid->depth, 2);
+  EXPECT_EQ(grid->points_in, 3u);
+  ASSERT_EQ(grid->morton.size(), 2u);
+  EXPECT_EQ(grid->morton[0], MortonEncode(0, 0, 0));
+  EXPECT_EQ(grid->morton[1], MortonEncode(3, 3, 3));
+  EXPECT_EQ(grid->colors[0], (Rgb8{16, 30, 143}));  // (10+21)/2 = 15.5 -> 16; (30+255)/2 = 142.5 -> 143
+  EXPECT_EQ(grid->colors[1], (Rgb8{1, 2, 3}));
+  EXPECT_EQ(grid->VoxelCentre(grid->morton[1]), (std::array<double, 3>{3.5, 3.5, 3.5}));
+}
+
+TEST(Voxelizer, ScalesSixteenBitColorToEightBits) {
+  VoxelizeOptions options;
+  options.depth = 3;
+  auto grid = VoxelizeInMemory({{0, 0, 0}, {1, 1, 1}}, {{65535, 257, 256 * 128}, {0, 0, 0}}, options);
+  ASSERT_TRUE(grid.ok());
+  EXPECT_EQ(grid->source_color_bits, 16);
+  EXPECT_EQ(grid->colors[0], (Rgb8{255, 1, 128}));
+}
+
+TEST(Voxelizer, ScanWithoutColorGetsNoColor) {
+  VoxelizeOptions options;
+  options.depth = 4;
+  auto grid = VoxelizeInMemory({{0, 0, 0}, {5, 5, 5}}, {}, options);
+  ASSERT_TRUE(grid.ok());
+  EXPECT_FALSE(grid->has_color());
+}
+
+TEST(Voxelizer, DepthFromVoxelSizeCoversTheExtent) {
+  EXPECT_EQ(*DepthForVoxelSize(3.0, 1.0), 2);     // 4 cells
+  EXPECT_EQ(*DepthForVoxelSize(4.0, 1.0), 3);     // the maximum at 4.0 needs a fifth cell
+  EXPECT_EQ(*DepthForVoxelSize(1023.5, 1.0), 10);
+  EXPECT_EQ(*DepthForVoxelSize(0.0, 1.0), 2);     // a single point still gets a 4^3 grid
+  EXPECT_EQ(DepthForVoxelSize(1e7, 1.0).status().code(), StatusCode::kInvalidArgument);  // > 2^21 cells
+  EXPECT_EQ(DepthForVoxelSize(1.0, 0.0).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(DepthForVoxelSize(1.0, std::nan("")).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(Voxelizer, RejectsBadOptions) {
+  VoxelizeOptions none;
+  EXPECT_EQ(VoxelizeInMemory({{0, 0, 0}}, {}, none).status().code(), StatusCode::kInvalidArgument);
+  VoxelizeOptions deep;
+  deep.depth = 22;
+  EXPECT_EQ(VoxelizeInMemory({{0, 0, 0}}, {}, deep).status().code(), StatusCode::kInvalidArgument);
+  VoxelizeOptions shallow;
+  shallow.depth = 1;
+  EXPECT_EQ(VoxelizeInMemory({{0, 0, 0}}, {}, shallow).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(Voxelizer, NonFinitePointIsAnError) {
+  VoxelizeOptions options;
+  options.depth = 4;
+  auto grid = VoxelizeInMemory({{0, 0, 0}, {INFINITY, 0, 0}}, {}, options);
+  EXPECT_EQ(grid.status().code(), StatusCode::kMalformed);
+}
+
+TEST(Voxelizer, EveryPointLandsInTheVoxelHoldingIt) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  std::vector<std::array<double, 3>> xyz(5000);
+  for (auto& p : xyz) p = {u(rng), u(rng), u(rng) * 0.1};
+  VoxelizeOptions options;
+  options.voxel_size = 0.7;
+  auto grid = VoxelizeInMemory(xyz, {}, options);
+  ASSERT_TRUE(grid.ok());
+  EXPECT_TRUE(std::is_sorted(grid->morton.begin(), grid->morton.end()));
+  EXPECT_EQ(std::adjacent_find(grid->morton.begin(), grid->morton.end()), grid->morton.end());
+  for (const auto& p : xyz) {
+    uint32_t cell[3];
+    for (int a = 0; a < 3; ++a) cell[a] = static_cast<uint32_t>(std::floor((p[a] - grid->origin[a]) / grid->voxel_size));
+    const uint64_t code = MortonEncode(cell[0], cell[1], cell[2]);
+    ASSERT_TRUE(std::binary_search(grid->morton.begin(), grid->morton.end(), code));
+    const auto centre = grid->VoxelCentre(code);
+    for (int a = 0; a < 3; ++a) EXPECT_LE(std::abs(centre[a] - p[a]), grid->voxel_size / 2 + 1e-9);
+  }
+}
+
+TEST(Voxelizer, RealScansMatchTheArchitectureTable) {
+  SKIP_WITHOUT_DATA();
+  const std::pair<const char*, double> cases[] = {{"autzen_trim_pdrf3_rgb.las", 4.0},
+                                                  {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.002}};
+  const size_t expected[] = {36931, 215979};  // ../shared/ARCHITECTURE.md, "Facts measured on real scans"
+  for (int i = 0; i < 2; ++i) {
+    auto reader = OpenScan(testing::DataDir() / cases[i].first);
+    ASSERT_TRUE(reader.ok());
+    VoxelizeOptions options;
+    options.voxel_size = cases[i].second;
+    auto grid = Voxelize(**reader, options);
+    ASSERT_TRUE(grid.ok()) << grid.status().ToString();
+    EXPECT_EQ(grid->morton.size(), expected[i]) << cases[i].first;
+  }
+}
+
+}  // namespace
+}  // namespace pointdag
