@@ -1,1 +1,114 @@
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+
+#include "pointdag/read/scan_reader.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+using testing::DataDir;
+using testing::ScratchDir;
+
+struct CliRun {
+  int exit_code;
+  std::string out, err;
+};
+
+// Runs the real `pointdag` binary; stderr is captured through a file.
+CliRun Cli(const std::string& args, const ScratchDir& dir) {
+  const auto err_path = dir / "stderr.txt";
+  const std::string command = std::string(POINTDAG_CLI) + " " + args + " 2>" + err_path.string();
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (size_t n; (n = fread(buf, 1, sizeof(buf), pipe)) > 0;) out.append(buf, n);
+  const int status = pclose(pipe);
+  const auto err = testing::ReadBytes(err_path);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, std::string(err.begin(), err.end())};
+}
+
+TEST(Cli, EncodeInfoDecodeRoundTrip) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const auto scan = (DataDir() / "autzen_trim_pdrf3_rgb.las").string();
+  const auto pdag = (dir / "a.pdag").string();
+  const CliRun encode = Cli("encode " + scan + " -o " + pdag + " --voxel 4", dir);
+  ASSERT_EQ(encode.exit_code, 0) << encode.err;
+  EXPECT_NE(encode.err.find("36931 voxels"), std::string::npos) << encode.err;
+
+  const CliRun info = Cli("info " + pdag + " --json", dir);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto json = nlohmann::json::parse(info.out);
+  EXPECT_EQ(json["voxels"], 36931);
+  EXPECT_EQ(json["depth"], 9);
+  EXPECT_GT(json["sections"]["geometry"].get<int>(), 0);
+  EXPECT_EQ(json["sections"]["colors"], 3 * 36931);
+  EXPECT_EQ(json["file_bytes"], std::filesystem::file_size(pdag));
+
+  const CliRun text_info = Cli("info " + pdag, dir);
+  EXPECT_EQ(text_info.exit_code, 0);
+  EXPECT_NE(text_info.out.find("Lambert_Conformal_Conic"), std::string::npos) << text_info.out;
+
+  const auto ply = (dir / "a.ply").string();
+  const CliRun decode = Cli("decode " + pdag + " -o " + ply, dir);
+  ASSERT_EQ(decode.exit_code, 0) << decode.err;
+  // The decoded PLY is a scan in its own right: one point per voxel, with color.
+  auto reader = OpenScan(ply);
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  EXPECT_EQ((*reader)->info().point_count, 36931u);
+  EXPECT_TRUE((*reader)->info().has_color);
+}
+
+TEST(Cli, CompareReportsUsAndDracoOnTheSameVoxels) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const CliRun run = Cli("compare " + (DataDir() / "tiny_1.2-with-color_1065pts.las").string() + " --depth 8 --json", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  EXPECT_EQ(json["depth"], 8);
+  EXPECT_GT(json["voxels"].get<int>(), 0);
+  EXPECT_GT(json["geometry_bits_per_voxel"].get<double>(), 0.0);
+  EXPECT_GT(json["draco_bits_per_point"].get<double>(), 0.0);
+  EXPECT_EQ(json["color_bits_per_voxel"], 24.0);
+}
+
+TEST(Cli, ExitCodesAreOneForBadInputAndTwoForUsage) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  auto bytes = testing::ReadBytes(DataDir() / "tiny_1.2-with-color_1065pts.las");
+  bytes.resize(bytes.size() - 100);
+  testing::WriteBytes(dir / "cut.las", bytes);
+  const CliRun bad = Cli("encode " + (dir / "cut.las").string() + " -o " + (dir / "out.pdag").string() + " --depth 8", dir);
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("Truncated"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.pdag"));  // nothing half-written
+
+  testing::WriteBytes(dir / "junk.pdag", {1, 2, 3});
+  EXPECT_EQ(Cli("info " + (dir / "junk.pdag").string(), dir).exit_code, 1);
+  EXPECT_EQ(Cli("decode " + (dir / "missing.pdag").string() + " -o x.ply", dir).exit_code, 1);
+
+  const std::string scan = (DataDir() / "tiny_1.2-with-color_1065pts.las").string();
+  EXPECT_EQ(Cli("", dir).exit_code, 2);
+  EXPECT_EQ(Cli("frobnicate", dir).exit_code, 2);
+  EXPECT_EQ(Cli("encode " + scan + " -o x.pdag", dir).exit_code, 2);  // neither --voxel nor --depth
+  EXPECT_EQ(Cli("encode " + scan + " -o x.pdag --voxel 1 --depth 5", dir).exit_code, 2);
+  EXPECT_EQ(Cli("encode " + scan + " -o x.pdag --depth 30", dir).exit_code, 2);
+  EXPECT_EQ(Cli("encode " + scan + " -o x.pdag --voxel -1", dir).exit_code, 2);
+  EXPECT_EQ(Cli("--help", dir).exit_code, 0);
+}
+
+TEST(Cli, VoxelTooSmallIsBadInputWithAReason) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const CliRun run = Cli("encode " + (DataDir() / "tiny_1.2-with-color_1065pts.las").string() + " -o " +
+                          (dir / "x.pdag").string() + " --voxel 0.0000001",
+                      dir);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("2^21"), std::string::npos) << run.err;
+}
+
+}  // namespace
+}  // namespace pointdag

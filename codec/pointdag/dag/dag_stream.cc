@@ -46,7 +46,7 @@ class ZstdSink {
     if (back) flags_.back() = static_cast<uint8_t>(flags_.back() | (1u << (flag_bits_ % 8)));
     ++flag_bits_;
   }
-  void Ref(uint32_t ordinal, uint32_t) { PutVarint(refs_, ordinal); }
+  void Ref(int, uint32_t ordinal, uint32_t) { PutVarint(refs_, ordinal); }
 
   StatusOr<std::vector<uint8_t>> Finish(std::vector<uint8_t> out) {
     std::array<std::vector<uint8_t>*, 3> streams = {&masks_, &flags_, &refs_};
@@ -109,7 +109,7 @@ class ZstdSource {
     ++flag_bit_;
     return back;
   }
-  uint32_t Ref(uint32_t) {
+  uint32_t Ref(int, uint32_t) {
     uint64_t v = 0;
     if (!GetVarint(refs_, ref_pos_, v) || v > 0xFFFFFFFFu) return Fail();
     return static_cast<uint32_t>(v);
@@ -128,7 +128,14 @@ class ZstdSource {
 };
 
 // Probability models shared by the context encoder and decoder.
+// Back-references are skewed towards nodes seen early (a handful of bricks repeat everywhere), so
+// an ordinal is coded Elias-gamma style: its bit length in unary, then its top bits below the
+// leading one, each with adaptive models per height; the remaining low bits go raw.
+constexpr int kRefModelledBits = 3;
+
 struct ContextModels {
+  std::array<std::array<BitModel, 33>, kMaskClasses> ref_length;
+  std::array<std::array<std::array<BitModel, 1 << kRefModelledBits>, 33>, kMaskClasses> ref_top;
   std::array<std::array<BitModel, 256>, kMaskClasses> mask;  // bit-tree: node 1..255
   std::array<BitModel, kMaskClasses> flag;
 };
@@ -144,7 +151,19 @@ class ContextSink {
     }
   }
   void Flag(int cls, bool back) { rc_.Encode(models_.flag[cls], back ? 1 : 0); }
-  void Ref(uint32_t ordinal, uint32_t bound) { rc_.EncodeDirect(ordinal, std::bit_width(bound - 1)); }
+  void Ref(int cls, uint32_t ordinal, uint32_t bound) {
+    const uint32_t v = ordinal + 1;
+    const int length = std::bit_width(v), max_length = std::bit_width(bound);
+    for (int i = 1; i < length; ++i) rc_.Encode(models_.ref_length[cls][i], 1);
+    if (length < max_length) rc_.Encode(models_.ref_length[cls][length], 0);
+    int rest = length - 1;
+    for (uint32_t node = 1; rest > 0 && node < (1u << kRefModelledBits); --rest) {
+      const int bit = static_cast<int>((v >> (rest - 1)) & 1u);
+      rc_.Encode(models_.ref_top[cls][length][node], bit);
+      node = node << 1 | static_cast<uint32_t>(bit);
+    }
+    rc_.EncodeDirect(v & ((1u << rest) - 1), rest);
+  }
   StatusOr<std::vector<uint8_t>> Finish(std::vector<uint8_t> out) {
     const std::vector<uint8_t> payload = rc_.Finish();
     out.insert(out.end(), payload.begin(), payload.end());
@@ -165,7 +184,20 @@ class ContextSource {
     return static_cast<uint8_t>(node);
   }
   bool Flag(int cls) { return rc_.Decode(models_.flag[cls]) != 0; }
-  uint32_t Ref(uint32_t bound) { return rc_.DecodeDirect(std::bit_width(bound - 1)); }
+  uint32_t Ref(int cls, uint32_t bound) {
+    const int max_length = std::bit_width(bound);
+    int length = 1;
+    while (length < max_length && rc_.Decode(models_.ref_length[cls][length])) ++length;
+    uint32_t v = 1;
+    int rest = length - 1;
+    for (uint32_t node = 1; rest > 0 && node < (1u << kRefModelledBits); --rest) {
+      const int bit = rc_.Decode(models_.ref_top[cls][length][node]);
+      node = node << 1 | static_cast<uint32_t>(bit);
+      v = v << 1 | static_cast<uint32_t>(bit);
+    }
+    v = v << rest | rc_.DecodeDirect(rest);
+    return v - 1;
+  }
   bool failed() const { return rc_.overrun(); }
 
  private:
@@ -198,7 +230,7 @@ Status WriteSymbols(const Svdag& dag, Sink& sink) {
         if (k > seen) return Internal("DAG is not in canonical breadth-first order");
         if (seen > 0) sink.Flag(cls, k < seen);
         if (k < seen) {
-          sink.Ref(k, seen);
+          sink.Ref(cls, k, seen);
         } else {
           ++seen;
         }
@@ -239,7 +271,7 @@ StatusOr<Svdag> ReadSymbols(Source& source, int depth, CountMode mode, const std
       for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
         uint32_t k;
         if (seen > 0 && source.Flag(cls)) {
-          k = source.Ref(seen);
+          k = source.Ref(cls, seen);
           if (k >= seen) return Corrupt("geometry stream refers to a node not yet seen");
         } else {
           k = seen++;

@@ -14,21 +14,6 @@ struct KeyedPoint {
   std::array<uint16_t, 3> rgb;
 };
 
-// LSD radix sort on the low `bits` bits of the key, 11 bits a pass: sorting dominates voxelizing,
-// and a comparison sort of millions of 16-byte records is several times slower on one core.
-void RadixSortByKey(std::vector<KeyedPoint>& points, int bits) {
-  constexpr int kRadixBits = 11;
-  constexpr size_t kBuckets = size_t{1} << kRadixBits;
-  std::vector<KeyedPoint> scratch(points.size());
-  for (int shift = 0; shift < bits; shift += kRadixBits) {
-    std::vector<size_t> offsets(kBuckets + 1, 0);
-    for (const auto& p : points) ++offsets[((p.key >> shift) & (kBuckets - 1)) + 1];
-    for (size_t b = 1; b <= kBuckets; ++b) offsets[b] += offsets[b - 1];
-    for (const auto& p : points) scratch[offsets[(p.key >> shift) & (kBuckets - 1)]++] = p;
-    points.swap(scratch);
-  }
-}
-
 }  // namespace
 
 std::array<double, 3> VoxelGrid::VoxelCentre(uint64_t code) const {
@@ -98,7 +83,8 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
     return Internal("scan yielded " + std::to_string(points.size()) + " points on its second pass, " +
                     std::to_string(survey.points) + " on its first");
   }
-  RadixSortByKey(points, 3 * grid.depth);
+  // In place: a radix sort's scratch copy would double the peak memory of the whole pipeline.
+  std::sort(points.begin(), points.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
 
   // One voxel per run of equal keys; its color is the rounded mean, scaled to 8 bits.
   const double to_8bit = survey.color_bits > 8 ? 1.0 / 257.0 : 1.0;

@@ -29,7 +29,7 @@ using ProgressFn = std::function<void(uint64_t, uint64_t)>;
 struct VoxelizeOptions {
   std::optional<double> voxel_size;  // exactly one of voxel_size and depth
   std::optional<int> depth;
-  size_t batch_points = 1 << 16;
+  size_t batch_points = 1 << 14;
   ProgressFn progress;
 };
 
