@@ -59,6 +59,13 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
   auto encoded = EncodeScan(scan, options);
   if (!encoded.ok()) return {{"error", encoded.status().ToString()}};
   const uint64_t peak = RssAndPeak().second;
+  // Timings: best of three runs, the usual guard against a busy shared machine.
+  for (int repeat = 0; repeat < 2; ++repeat) {
+    auto again = EncodeScan(scan, options);
+    if (!again.ok()) break;
+    encoded->seconds.read_voxelize = std::min(encoded->seconds.read_voxelize, again->seconds.read_voxelize);
+    encoded->seconds.build = std::min(encoded->seconds.build, again->seconds.build);
+  }
   auto zstd_stream = EncodeDag(encoded->dag, GeometryCoder::kZstd);
   auto draco = DracoEncodeVoxels(encoded->grid);
   const double points = static_cast<double>(encoded->grid.points_in);
@@ -132,7 +139,8 @@ int RunBench(const BenchOptions& options) {
   }
   std::sort(scans.begin(), scans.end());
   if (!options.json) {
-    std::printf("machine: %s; one core (the codec core is single-threaded)\n", MachineName().c_str());
+    std::printf("machine: %s; one core (the codec core is single-threaded); times are the best of 3 runs\n",
+                MachineName().c_str());
     std::printf("| scan | voxel | points | voxels | read+vox Mpt/s | build Mpt/s | read+vox+build Mpt/s | peak RSS MiB (net) | raw MiB "
                 "| resident b/vox | stored zstd b/vox | stored ctx b/vox | Draco b/pt |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
