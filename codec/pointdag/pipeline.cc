@@ -76,14 +76,28 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
   VoxelizeOptions vopt;
   vopt.voxel_size = options.voxel_size;
   vopt.depth = options.depth;
+  vopt.max_points_in_memory = options.max_points_in_memory;
+  vopt.spill_dir = options.spill_dir;
   vopt.progress = options.progress;
+  // Each voxelized chunk becomes a sub-DAG merged at once (Paper I), so no stage holds every point.
+  std::optional<DagMerger> merger;
+  vopt.on_chunk = [&](const VoxelGrid& grid, size_t first_voxel) -> Status {
+    const auto chunk_start = std::chrono::steady_clock::now();
+    if (!merger) {
+      ASSIGN_OR_RETURN(DagMerger created, DagMerger::Create(grid.depth, grid.chunk_levels));
+      merger.emplace(std::move(created));
+    }
+    const Status status = merger->AddChunk(std::span(grid.morton).subspan(first_voxel));
+    out.seconds.build += SecondsSince(chunk_start);
+    return status;
+  };
   ASSIGN_OR_RETURN(out.grid, Voxelize(*reader, vopt));
   out.scan = reader->info();
-  out.seconds.read_voxelize = SecondsSince(start);
-
-  start = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(out.dag, BuildDag(out.grid.morton, out.grid.depth));
-  out.seconds.build = SecondsSince(start);
+  if (!merger) return Internal("voxelizing produced no chunk");
+  const auto finish_start = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(out.dag, merger->Finish());
+  out.seconds.build += SecondsSince(finish_start);
+  out.seconds.read_voxelize = SecondsSince(start) - out.seconds.build;
 
   start = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));

@@ -23,12 +23,14 @@ struct EncodeOptions {
   std::optional<double> voxel_size;  // exactly one of voxel_size and depth
   std::optional<int> depth;
   GeometryCoder geometry_coder = GeometryCoder::kContext;
+  uint64_t max_points_in_memory = uint64_t{1} << 25;  // above it, voxelize and build chunk by chunk
+  std::filesystem::path spill_dir;                    // chunk files; empty: the system's temp folder
   ProgressFn progress;
 };
 
 struct StageSeconds {
-  double read_voxelize = 0;
-  double build = 0;
+  double read_voxelize = 0;  // reading, quantizing, sorting and averaging
+  double build = 0;          // DAG building and merging (interleaved with voxelizing when chunked)
   double encode = 0;
 };
 

@@ -62,6 +62,20 @@ TEST_P(PipelineTest, ChunkedBuildEqualsOneGoBuild) {
   EXPECT_EQ(*chunked, encoded->dag);
 }
 
+// Voxelizing and building chunk by chunk (bounded memory) writes the very same file.
+TEST_P(PipelineTest, ChunkedPipelineWritesTheSameFile) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = GetParam().voxel;
+  auto whole = EncodeScan(DataDir() / GetParam().file, options);
+  ASSERT_TRUE(whole.ok());
+  options.max_points_in_memory = 100;
+  auto chunked = EncodeScan(DataDir() / GetParam().file, options);
+  ASSERT_TRUE(chunked.ok()) << chunked.status().ToString();
+  EXPECT_GT(chunked->grid.chunk_levels, 0);
+  EXPECT_EQ(SerializePdag(chunked->file), SerializePdag(whole->file));
+}
+
 INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(kScans), [](const auto& param_info) {
   std::string name = param_info.param.file;
   for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';

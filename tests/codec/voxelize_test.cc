@@ -128,3 +128,87 @@ TEST(Voxelizer, RealScansMatchTheArchitectureTable) {
 
 }  // namespace
 }  // namespace pointdag
+
+namespace pointdag {
+namespace {
+
+size_t Entries(const std::filesystem::path& dir) {
+  size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++n;
+  return n;
+}
+
+TEST(ChunkedVoxelizer, SpillingChunksGivesTheSameGridAndCleansUp) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir spill;
+  for (const char* file : {"lion_takanawa_pdrf7_rgb.las", "pcx_guanyin_cc-by-4.0_rgb.ply"}) {
+    auto reader = OpenScan(testing::DataDir() / file);
+    ASSERT_TRUE(reader.ok());
+    VoxelizeOptions options;
+    options.voxel_size = 0.005;
+    auto in_memory = Voxelize(**reader, options);
+    ASSERT_TRUE(in_memory.ok());
+    EXPECT_EQ(in_memory->chunk_levels, 0);
+    for (uint64_t budget : {200000u, 20000u, 1000u}) {
+      options.max_points_in_memory = budget;
+      options.spill_dir = spill.path();
+      size_t chunks = 0, voxels_seen = 0;
+      options.on_chunk = [&](const VoxelGrid& grid, size_t first) {
+        ++chunks;
+        EXPECT_EQ(first, voxels_seen);  // chunks arrive in order, each exactly once
+        voxels_seen = grid.morton.size();
+        return Status::Ok();
+      };
+      auto chunked = Voxelize(**reader, options);
+      ASSERT_TRUE(chunked.ok()) << chunked.status().ToString();
+      EXPECT_GT(chunked->chunk_levels, 0);
+      EXPECT_GT(chunks, 1u);
+      EXPECT_EQ(voxels_seen, chunked->morton.size());
+      EXPECT_EQ(chunked->morton, in_memory->morton) << file << " budget " << budget;
+      EXPECT_EQ(chunked->colors, in_memory->colors);
+      EXPECT_EQ(Entries(spill.path()), 0u) << "spill files left behind";
+    }
+  }
+}
+
+// Fails on its second pass, after some points have already been spilled.
+class FailingSecondPass final : public ScanReader {
+ public:
+  explicit FailingSecondPass(size_t n) : n_(n) {
+    info_.point_count = n;
+    info_.has_color = false;
+  }
+  StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override {
+    batch.clear();
+    if (pass_ == 2 && next_ > n_ / 2) return IoError("disk went away");
+    const size_t n = std::min(max_points, n_ - next_);
+    for (size_t i = 0; i < n; ++i) batch.xyz.push_back({double(next_ + i), double((next_ + i) % 7), 0.0});
+    next_ += n;
+    return n;
+  }
+  Status Rewind() override {
+    ++pass_;
+    next_ = 0;
+    return Status::Ok();
+  }
+
+ private:
+  size_t n_, next_ = 0;
+  int pass_ = 0;
+};
+
+TEST(ChunkedVoxelizer, FailureMidPassLeavesNoSpillFiles) {
+  testing::ScratchDir spill;
+  FailingSecondPass reader(100000);
+  VoxelizeOptions options;
+  options.depth = 12;
+  options.batch_points = 1000;
+  options.max_points_in_memory = 1000;
+  options.spill_dir = spill.path();
+  const auto result = Voxelize(reader, options);
+  EXPECT_EQ(result.status().code(), StatusCode::kIoError);
+  EXPECT_EQ(Entries(spill.path()), 0u);
+}
+
+}  // namespace
+}  // namespace pointdag

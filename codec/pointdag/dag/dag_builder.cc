@@ -26,9 +26,11 @@ struct UniqueLevel {
   size_t size() const { return hash.size(); }
 };
 
-class Interner {
+}  // namespace
+
+class DagMerger::Impl {
  public:
-  Interner(int depth, const DagBuildOptions& options) : depth_(depth), options_(options), levels_(depth + 1) {}
+  Impl(int depth, const DagBuildOptions& options) : depth_(depth), options_(options), levels_(depth + 1) {}
 
   uint32_t InternBrick(uint64_t brick) {
     UniqueLevel& level = levels_[2];
@@ -230,13 +232,15 @@ class Interner {
   uint32_t root_ = kNoId;
 };
 
+namespace {
+
 Status CheckDepth(int depth) {
   if (depth < 2 || depth > kMaxDepth) return InvalidArgument("DAG depth must be 2..21, got " + std::to_string(depth));
   return Status::Ok();
 }
 
 // Feeds sorted codes (all below 8^depth) to the interner, one brick at a time.
-Status PushVoxels(Interner& interner, std::span<const uint64_t> morton, int depth) {
+Status PushVoxels(DagMerger::Impl& interner, std::span<const uint64_t> morton, int depth) {
   const uint64_t limit = uint64_t{1} << (3 * depth);
   for (size_t i = 0; i < morton.size();) {
     const uint64_t brick_key = morton[i] >> 6;
@@ -255,53 +259,74 @@ Status PushVoxels(Interner& interner, std::span<const uint64_t> morton, int dept
 
 }  // namespace
 
+DagMerger::DagMerger(int depth, int chunk_levels, const DagBuildOptions& options)
+    : impl_(std::make_unique<Impl>(depth, options)), depth_(depth), chunk_levels_(chunk_levels), options_(options) {}
+DagMerger::~DagMerger() = default;
+DagMerger::DagMerger(DagMerger&&) noexcept = default;
+
+StatusOr<DagMerger> DagMerger::Create(int depth, int chunk_levels, const DagBuildOptions& options) {
+  RETURN_IF_ERROR(CheckDepth(depth));
+  if (chunk_levels < 0 || depth - chunk_levels < 2) {
+    return InvalidArgument("chunk levels must leave sub-DAGs of depth 2 or more");
+  }
+  return DagMerger(depth, chunk_levels, options);
+}
+
+Status DagMerger::AddSubdag(const Svdag& sub, uint64_t prefix) {
+  if (sub.depth != depth_ - chunk_levels_) return InvalidArgument("sub-DAG depth does not match the chunk size");
+  if (prefix >> (3 * chunk_levels_) != 0) return InvalidArgument("sub-DAG prefix lies outside the grid");
+  if (added_any_ && prefix <= last_prefix_) return InvalidArgument("sub-DAGs must come in strictly increasing prefix order");
+  added_any_ = true;
+  last_prefix_ = prefix;
+  return impl_->AddSubdag(sub, prefix);
+}
+
+Status DagMerger::AddChunk(std::span<const uint64_t> codes) {
+  if (codes.empty()) return Status::Ok();
+  const int sub_depth = depth_ - chunk_levels_;
+  const int shift = 3 * sub_depth;
+  const uint64_t prefix = codes.front() >> shift;
+  if (codes.back() >> shift != prefix) return InvalidArgument("a chunk's voxels must share one chunk cell");
+  std::vector<uint64_t> local(codes.size());
+  for (size_t i = 0; i < codes.size(); ++i) local[i] = codes[i] & ((uint64_t{1} << shift) - 1);
+  ASSIGN_OR_RETURN(Svdag sub, BuildDag(local, sub_depth, options_));
+  return AddSubdag(sub, prefix);
+}
+
+StatusOr<Svdag> DagMerger::Finish() {
+  RETURN_IF_ERROR(impl_->Finish());
+  return impl_->Emit();
+}
+
 StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagBuildOptions& options) {
   RETURN_IF_ERROR(CheckDepth(depth));
-  Interner interner(depth, options);
+  DagMerger::Impl interner(depth, options);
   RETURN_IF_ERROR(PushVoxels(interner, morton, depth));
   RETURN_IF_ERROR(interner.Finish());
   return interner.Emit();
 }
 
 StatusOr<Svdag> MergeSubdags(std::span<const PlacedSubdag> parts, int depth, const DagBuildOptions& options) {
-  RETURN_IF_ERROR(CheckDepth(depth));
-  Interner interner(depth, options);
-  for (size_t i = 0; i < parts.size(); ++i) {
-    if (i > 0 && parts[i].prefix <= parts[i - 1].prefix) {
-      return InvalidArgument("sub-DAGs must come in strictly increasing prefix order");
-    }
-    if (parts[i].dag->depth != parts[0].dag->depth) return InvalidArgument("sub-DAGs must share one depth");
-    RETURN_IF_ERROR(interner.AddSubdag(*parts[i].dag, parts[i].prefix));
-  }
-  RETURN_IF_ERROR(interner.Finish());
-  return interner.Emit();
+  if (parts.empty()) return InvalidArgument("nothing to merge");
+  ASSIGN_OR_RETURN(DagMerger merger, DagMerger::Create(depth, depth - parts[0].dag->depth, options));
+  for (const PlacedSubdag& part : parts) RETURN_IF_ERROR(merger.AddSubdag(*part.dag, part.prefix));
+  return merger.Finish();
 }
 
 StatusOr<Svdag> BuildDagChunked(std::span<const uint64_t> morton, int depth, int chunk_levels,
                                 const DagBuildOptions& options) {
-  RETURN_IF_ERROR(CheckDepth(depth));
-  if (chunk_levels < 0 || depth - chunk_levels < 2) {
-    return InvalidArgument("chunk levels must leave sub-DAGs of depth 2 or more");
-  }
+  ASSIGN_OR_RETURN(DagMerger merger, DagMerger::Create(depth, chunk_levels, options));
   if (!morton.empty() && morton.back() >> (3 * depth) != 0) {
     return InvalidArgument("Morton code outside the depth-" + std::to_string(depth) + " grid");
   }
-  const int sub_depth = depth - chunk_levels;
-  const int shift = 3 * sub_depth;
-  const uint64_t low_mask = (uint64_t{1} << shift) - 1;
-  Interner interner(depth, options);
-  std::vector<uint64_t> local;
+  const int shift = 3 * (depth - chunk_levels);
   for (size_t begin = 0; begin < morton.size();) {
-    const uint64_t prefix = morton[begin] >> shift;
     size_t end = begin;
-    local.clear();
-    for (; end < morton.size() && morton[end] >> shift == prefix; ++end) local.push_back(morton[end] & low_mask);
-    ASSIGN_OR_RETURN(Svdag sub, BuildDag(local, sub_depth, options));
-    RETURN_IF_ERROR(interner.AddSubdag(sub, prefix));
+    while (end < morton.size() && morton[end] >> shift == morton[begin] >> shift) ++end;
+    RETURN_IF_ERROR(merger.AddChunk(morton.subspan(begin, end - begin)));
     begin = end;
   }
-  RETURN_IF_ERROR(interner.Finish());
-  return interner.Emit();
+  return merger.Finish();
 }
 
 }  // namespace pointdag

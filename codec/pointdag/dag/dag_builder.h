@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 
 #include "pointdag/dag/svdag.h"
@@ -35,6 +36,32 @@ StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagB
 struct PlacedSubdag {
   const Svdag* dag = nullptr;
   uint64_t prefix = 0;
+};
+
+// Incremental merge (Paper I): sub-DAGs of the cells of level `chunk_levels`, added in increasing
+// Morton order, become one DAG of the whole depth-`depth` grid. Memory: the unique nodes so far.
+class DagMerger {
+ public:
+  static StatusOr<DagMerger> Create(int depth, int chunk_levels, const DagBuildOptions& options = {});
+  DagMerger(DagMerger&&) noexcept;
+  ~DagMerger();
+
+  // A sub-DAG of depth (depth - chunk_levels) whose root is cell `prefix` of level chunk_levels.
+  Status AddSubdag(const Svdag& sub, uint64_t prefix);
+  // Builds and adds the sub-DAG of one chunk from its voxels (sorted global Morton codes, one cell).
+  Status AddChunk(std::span<const uint64_t> codes);
+  StatusOr<Svdag> Finish();
+
+  class Impl;
+
+ private:
+  DagMerger(int depth, int chunk_levels, const DagBuildOptions& options);
+  std::unique_ptr<Impl> impl_;
+  int depth_;
+  int chunk_levels_;
+  DagBuildOptions options_;
+  bool added_any_ = false;
+  uint64_t last_prefix_ = 0;
 };
 
 // Merges sub-DAGs of disjoint cells, in increasing prefix order, all of the same depth and mode,

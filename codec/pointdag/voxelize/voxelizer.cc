@@ -36,6 +36,91 @@ StatusOr<int> DepthForVoxelSize(double extent, double voxel_size) {
   return depth;
 }
 
+namespace {
+
+// Points of one chunk -> voxels appended to the grid (mean colors), then the chunk callback.
+Status ReduceChunk(std::vector<KeyedPoint>& points, const ScanSurvey& survey, VoxelGrid& grid,
+                   const ChunkFn& on_chunk) {
+  const size_t first_voxel = grid.morton.size();
+  // In place: a radix sort's scratch copy would double the peak memory of the whole pipeline.
+  std::sort(points.begin(), points.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
+  const double to_8bit = survey.color_bits > 8 ? 1.0 / 257.0 : 1.0;
+  for (size_t begin = 0; begin < points.size();) {
+    size_t end = begin + 1;
+    while (end < points.size() && points[end].key == points[begin].key) ++end;
+    grid.morton.push_back(points[begin].key);
+    if (survey.has_color) {
+      uint64_t sum[3] = {0, 0, 0};
+      for (size_t i = begin; i < end; ++i) {
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += points[i].rgb[ch];
+      }
+      const double n = static_cast<double>(end - begin);
+      uint8_t mean[3];
+      for (int ch = 0; ch < 3; ++ch) {
+        mean[ch] = static_cast<uint8_t>(std::clamp(std::round(static_cast<double>(sum[ch]) / n * to_8bit), 0.0, 255.0));
+      }
+      grid.colors.push_back({mean[0], mean[1], mean[2]});
+    }
+    begin = end;
+  }
+  return on_chunk ? on_chunk(grid, first_voxel) : Status::Ok();
+}
+
+// Chunk files of one voxelization, removed with their folder however the voxelization ends.
+class SpillFiles {
+ public:
+  Status Create(const std::filesystem::path& parent, size_t chunks) {
+    std::error_code ec;
+    const auto base = parent.empty() ? std::filesystem::temp_directory_path(ec) : parent;
+    std::string dir = (base / "pointdag-spill-XXXXXX").string();
+    if (ec || !mkdtemp(dir.data())) return IoError("cannot create a spill folder in " + base.string());
+    dir_ = dir;
+    files_.assign(chunks, nullptr);
+    return Status::Ok();
+  }
+  ~SpillFiles() {
+    for (std::FILE* f : files_) {
+      if (f) std::fclose(f);
+    }
+    std::error_code ec;
+    if (!dir_.empty()) std::filesystem::remove_all(dir_, ec);
+  }
+  Status Append(size_t chunk, const KeyedPoint& p) {
+    if (!files_[chunk]) {
+      files_[chunk] = std::fopen((dir_ / std::to_string(chunk)).c_str(), "w+b");
+      if (!files_[chunk]) return IoError("cannot create a spill file in " + dir_.string());
+    }
+    if (std::fwrite(&p, sizeof(p), 1, files_[chunk]) != 1) return IoError("cannot write a spill file (disk full?)");
+    return Status::Ok();
+  }
+  // Reads a chunk's points back and deletes its file; empty for a chunk that got no point.
+  Status Take(size_t chunk, std::vector<KeyedPoint>& points) {
+    points.clear();
+    std::FILE* f = files_[chunk];
+    if (!f) return Status::Ok();
+    const long bytes = std::ftell(f);
+    points.resize(static_cast<size_t>(bytes) / sizeof(KeyedPoint));
+    std::rewind(f);
+    const bool ok = std::fread(points.data(), sizeof(KeyedPoint), points.size(), f) == points.size();
+    std::fclose(f);
+    files_[chunk] = nullptr;
+    std::filesystem::remove(dir_ / std::to_string(chunk));
+    return ok ? Status::Ok() : IoError("cannot read back a spill file");
+  }
+
+ private:
+  std::filesystem::path dir_;
+  std::vector<std::FILE*> files_;
+};
+
+int ChunkLevels(uint64_t points, uint64_t max_in_memory, int depth) {
+  int k = 0;
+  while (k < std::min(3, depth - 2) && points > (max_in_memory << (3 * k))) ++k;
+  return k;
+}
+
+}  // namespace
+
 StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options) {
   if (options.voxel_size.has_value() == options.depth.has_value()) {
     return InvalidArgument("give exactly one of voxel size and depth");
@@ -59,11 +144,19 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
     ASSIGN_OR_RETURN(grid.depth, DepthForVoxelSize(extent, *options.voxel_size));
     grid.voxel_size = *options.voxel_size;
   }
+  grid.chunk_levels = ChunkLevels(survey.points, std::max<uint64_t>(1, options.max_points_in_memory), grid.depth);
+  const int chunk_shift = 3 * (grid.depth - grid.chunk_levels);
 
+  SpillFiles spill;
   std::vector<KeyedPoint> points;
-  points.reserve(static_cast<size_t>(survey.points));
+  if (grid.chunk_levels > 0) {
+    RETURN_IF_ERROR(spill.Create(options.spill_dir, size_t{1} << (3 * grid.chunk_levels)));
+  } else {
+    points.reserve(static_cast<size_t>(survey.points));
+  }
   const uint32_t max_cell = (uint32_t{1} << grid.depth) - 1;
   const double inv_size = 1.0 / grid.voxel_size;
+  uint64_t read = 0;
   PointBatch batch;
   for (;;) {
     ASSIGN_OR_RETURN(size_t n, reader.Read(batch, options.batch_points));
@@ -74,37 +167,28 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
         const double c = std::floor((batch.xyz[i][axis] - grid.origin[axis]) * inv_size);
         cell[axis] = static_cast<uint32_t>(std::clamp(c, 0.0, static_cast<double>(max_cell)));
       }
-      points.push_back({MortonEncode(cell[0], cell[1], cell[2]),
-                        survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}});
+      const KeyedPoint p{MortonEncode(cell[0], cell[1], cell[2]),
+                         survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}};
+      if (grid.chunk_levels > 0) {
+        RETURN_IF_ERROR(spill.Append(static_cast<size_t>(p.key >> chunk_shift), p));
+      } else {
+        points.push_back(p);
+      }
     }
-    if (options.progress) options.progress(points.size(), survey.points);
+    read += n;
+    if (options.progress) options.progress(read, survey.points);
   }
-  if (points.size() != survey.points) {
-    return Internal("scan yielded " + std::to_string(points.size()) + " points on its second pass, " +
+  if (read != survey.points) {
+    return Internal("scan yielded " + std::to_string(read) + " points on its second pass, " +
                     std::to_string(survey.points) + " on its first");
   }
-  // In place: a radix sort's scratch copy would double the peak memory of the whole pipeline.
-  std::sort(points.begin(), points.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
-
-  // One voxel per run of equal keys; its color is the rounded mean, scaled to 8 bits.
-  const double to_8bit = survey.color_bits > 8 ? 1.0 / 257.0 : 1.0;
-  for (size_t begin = 0; begin < points.size();) {
-    size_t end = begin + 1;
-    while (end < points.size() && points[end].key == points[begin].key) ++end;
-    grid.morton.push_back(points[begin].key);
-    if (survey.has_color) {
-      uint64_t sum[3] = {0, 0, 0};
-      for (size_t i = begin; i < end; ++i) {
-        for (int ch = 0; ch < 3; ++ch) sum[ch] += points[i].rgb[ch];
-      }
-      const double n = static_cast<double>(end - begin);
-      uint8_t mean[3];
-      for (int ch = 0; ch < 3; ++ch) {
-        mean[ch] = static_cast<uint8_t>(std::clamp(std::round(static_cast<double>(sum[ch]) / n * to_8bit), 0.0, 255.0));
-      }
-      grid.colors.push_back({mean[0], mean[1], mean[2]});
-    }
-    begin = end;
+  if (grid.chunk_levels == 0) {
+    RETURN_IF_ERROR(ReduceChunk(points, survey, grid, options.on_chunk));
+    return grid;
+  }
+  for (size_t chunk = 0; chunk < (size_t{1} << (3 * grid.chunk_levels)); ++chunk) {
+    RETURN_IF_ERROR(spill.Take(chunk, points));
+    if (!points.empty()) RETURN_IF_ERROR(ReduceChunk(points, survey, grid, options.on_chunk));
   }
   return grid;
 }

@@ -6,10 +6,16 @@
 // voxel become one voxel whose color is the rounded mean of their colors, in 8 bits (16-bit sources
 // are scaled, 8-bit values stored in 16-bit fields are kept). Voxels come out sorted by Morton code,
 // which is also the DAG's color order.
+//
+// Memory: up to max_points_in_memory points are sorted in memory (16 bytes each). Larger scans are
+// cut into the 8^k cells of level k (k <= 3, the smallest that fits on average): the second pass
+// spills each point to its cell's file, then the cells are reduced one at a time in Morton order,
+// so the peak is one cell's points plus the voxels (11 bytes each) instead of every point.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -26,11 +32,19 @@ struct Rgb8 {
 // Called now and then with (points done, points total) for progress display.
 using ProgressFn = std::function<void(uint64_t, uint64_t)>;
 
+struct VoxelGrid;
+
+// Told about each finished chunk: its voxels are grid.morton[first_voxel..] (and the same colors).
+using ChunkFn = std::function<Status(const VoxelGrid& grid, size_t first_voxel)>;
+
 struct VoxelizeOptions {
   std::optional<double> voxel_size;  // exactly one of voxel_size and depth
   std::optional<int> depth;
   size_t batch_points = 1 << 14;
+  uint64_t max_points_in_memory = uint64_t{1} << 25;
+  std::filesystem::path spill_dir;  // where chunk files go; empty: the system's temporary folder
   ProgressFn progress;
+  ChunkFn on_chunk;
 };
 
 struct VoxelGrid {
@@ -41,6 +55,7 @@ struct VoxelGrid {
   std::vector<Rgb8> colors;      // parallel to morton; empty when the scan has no color
   uint64_t points_in = 0;
   int source_color_bits = 8;
+  int chunk_levels = 0;  // 0: voxelized in memory; k: in the 8^k cells of level k
 
   bool has_color() const { return !colors.empty(); }
   // Centre of a voxel in source units.
