@@ -45,7 +45,7 @@ std::pair<uint64_t, uint64_t> RssAndPeak() {
   return {rss, peak};
 }
 
-nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
+nlohmann::json RunCase(const std::filesystem::path& scan, double voxel, uint64_t max_points_in_memory) {
   // Warm up on the same file at the coarsest grid so that code pages are in, give the heap back,
   // then reset the high-water mark: what remains is the memory this case itself needs.
   EncodeOptions warm;
@@ -56,6 +56,7 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
   const uint64_t baseline = RssAndPeak().first;
   EncodeOptions options;
   options.voxel_size = voxel;
+  options.max_points_in_memory = max_points_in_memory;
   auto encoded = EncodeScan(scan, options);
   if (!encoded.ok()) return {{"error", encoded.status().ToString()}};
   const uint64_t peak = RssAndPeak().second;
@@ -78,6 +79,7 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
       {"points", encoded->grid.points_in},
       {"voxels", encoded->grid.morton.size()},
       {"depth", encoded->grid.depth},
+      {"chunk_levels", encoded->grid.chunk_levels},
       {"read_voxelize_points_per_s", points / s.read_voxelize},
       {"build_points_per_s", points / s.build},
       {"read_voxelize_build_points_per_s", points / (s.read_voxelize + s.build)},
@@ -92,13 +94,13 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel) {
 }
 
 // Each case runs in its own child process so that peak RSS is that case's alone.
-nlohmann::json RunCaseIsolated(const std::filesystem::path& scan, double voxel) {
+nlohmann::json RunCaseIsolated(const std::filesystem::path& scan, double voxel, uint64_t max_points_in_memory) {
   int fds[2];
   if (pipe(fds) != 0) return {{"error", "pipe failed"}};
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    const std::string line = RunCase(scan, voxel).dump();
+    const std::string line = RunCase(scan, voxel, max_points_in_memory).dump();
     [[maybe_unused]] const ssize_t n = write(fds[1], line.data(), line.size());
     close(fds[1]);
     _exit(0);
@@ -149,7 +151,7 @@ int RunBench(const BenchOptions& options) {
     const auto it = kVoxelSizes.find(scan.filename().string());
     if (it == kVoxelSizes.end()) continue;
     for (double voxel : {it->second.first, it->second.second}) {
-      const nlohmann::json r = RunCaseIsolated(scan, voxel);
+      const nlohmann::json r = RunCaseIsolated(scan, voxel, options.max_points_in_memory);
       if (options.json) {
         std::cout << r.dump() << std::endl;
         continue;

@@ -1,6 +1,7 @@
 // `pointdag bench`: the codec-core benchmark over a folder of scans (a command, not a test).
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace pointdag {
@@ -8,6 +9,7 @@ namespace pointdag {
 struct BenchOptions {
   std::string data_dir = "../shared/data";
   bool json = false;
+  uint64_t max_points_in_memory = uint64_t{1} << 25;
 };
 
 int RunBench(const BenchOptions& options);

@@ -30,6 +30,7 @@ int Fail(const Status& status) {
 struct GridChoice {
   std::optional<double> voxel;
   std::optional<int> depth;
+  uint64_t chunk_points = EncodeOptions{}.max_points_in_memory;
 };
 
 void AddGridOptions(CLI::App* cmd, GridChoice& choice) {
@@ -37,12 +38,17 @@ void AddGridOptions(CLI::App* cmd, GridChoice& choice) {
   auto* depth = cmd->add_option("--depth", choice.depth, "grid depth: 2^D voxels per side")->check(CLI::Range(2, 21));
   voxel->excludes(depth);
   depth->excludes(voxel);
+  cmd->add_option("--chunk-points", choice.chunk_points,
+                  "most points sorted in memory; larger scans go through spatial chunks on disk")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 EncodeOptions MakeEncodeOptions(const GridChoice& choice, const std::string& input) {
   EncodeOptions options;
   options.voxel_size = choice.voxel;
   options.depth = choice.depth;
+  options.max_points_in_memory = choice.chunk_points;
   options.progress = MakeProgressBar(input);
   return options;
 }
@@ -190,6 +196,7 @@ int Main(int argc, char** argv) {
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
   bench->add_flag("--json", bench_options.json, "print JSON lines instead of a table");
+  bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
 
   try {
     app.parse(argc, argv);

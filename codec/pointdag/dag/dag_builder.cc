@@ -283,6 +283,11 @@ Status DagMerger::AddSubdag(const Svdag& sub, uint64_t prefix) {
 
 Status DagMerger::AddChunk(std::span<const uint64_t> codes) {
   if (codes.empty()) return Status::Ok();
+  if (chunk_levels_ == 0) {  // one chunk is the whole grid: stream it in, no sub-DAG to intern twice
+    if (added_any_) return InvalidArgument("a grid of one chunk takes one chunk");
+    added_any_ = true;
+    return PushVoxels(*impl_, codes, depth_);
+  }
   const int sub_depth = depth_ - chunk_levels_;
   const int shift = 3 * sub_depth;
   const uint64_t prefix = codes.front() >> shift;

@@ -48,7 +48,8 @@ class DagMerger {
 
   // A sub-DAG of depth (depth - chunk_levels) whose root is cell `prefix` of level chunk_levels.
   Status AddSubdag(const Svdag& sub, uint64_t prefix);
-  // Builds and adds the sub-DAG of one chunk from its voxels (sorted global Morton codes, one cell).
+  // Builds and adds the sub-DAG of one chunk from its voxels (sorted global Morton codes, one cell);
+  // with chunk_levels 0 the voxels stream straight into the DAG.
   Status AddChunk(std::span<const uint64_t> codes);
   StatusOr<Svdag> Finish();
 

@@ -63,6 +63,7 @@ Status ReduceChunk(std::vector<KeyedPoint>& points, const ScanSurvey& survey, Vo
     }
     begin = end;
   }
+  std::vector<KeyedPoint>().swap(points);  // give the points back before the chunk's DAG is built
   return on_chunk ? on_chunk(grid, first_voxel) : Status::Ok();
 }
 
