@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -21,6 +22,7 @@ namespace pointdag {
 namespace {
 
 constexpr int kExitBadInput = 1;
+constexpr double kDefaultQualityDb = 38.0;
 
 int Fail(const Status& status) {
   std::cerr << "pointdag: " << status.ToString() << "\n";
@@ -53,17 +55,43 @@ EncodeOptions MakeEncodeOptions(const GridChoice& choice, const std::string& inp
   return options;
 }
 
-int RunEncode(const std::string& input, const std::string& output, const GridChoice& choice, GeometryCoder coder) {
+struct ColorChoice {
+  std::optional<double> quality;
+  bool lossless = false;
+  std::optional<std::string> codec;
+};
+
+// --lossless (the default), --quality DB (vbr unless --color-codec says fixed3), or --color-codec.
+StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
+  ColorEncodeOptions options{ColorCodec::kLossless, std::nullopt};
+  if (choice.codec) {
+    ASSIGN_OR_RETURN(options.codec, ParseColorCodec(*choice.codec));
+  } else if (choice.quality) {
+    options.codec = ColorCodec::kVariableRate;
+  }
+  const bool lossy = options.codec == ColorCodec::kFixedRate || options.codec == ColorCodec::kVariableRate;
+  if (choice.quality && !lossy) return InvalidArgument("--quality needs a lossy color codec (vbr or fixed3)");
+  options.target_psnr_y = lossy ? std::optional<double>(choice.quality.value_or(kDefaultQualityDb)) : std::nullopt;
+  return options;
+}
+
+int RunEncode(const std::string& input, const std::string& output, const GridChoice& choice, GeometryCoder coder,
+              const ColorEncodeOptions& colors) {
   EncodeOptions options = MakeEncodeOptions(choice, input);
   options.geometry_coder = coder;
+  options.colors = colors;
   auto encoded = EncodeScan(input, options);
   if (!encoded.ok()) return Fail(encoded.status());
   if (Status s = WritePdag(output, encoded->file); !s.ok()) return Fail(s);
   const double voxels = static_cast<double>(encoded->grid.morton.size());
-  std::fprintf(stderr, "%s: %llu points -> %zu voxels (depth %d, voxel %.6g), geometry %.3f bits/voxel, colors %.2f bits/voxel\n",
+  std::fprintf(stderr, "%s: %llu points -> %zu voxels (depth %d, voxel %.6g), geometry %.3f bits/voxel",
                output.c_str(), static_cast<unsigned long long>(encoded->grid.points_in), encoded->grid.morton.size(),
-               encoded->grid.depth, encoded->grid.voxel_size, 8.0 * static_cast<double>(encoded->file.geometry.size()) / voxels,
-               8.0 * static_cast<double>(encoded->file.colors.size()) / voxels);
+               encoded->grid.depth, encoded->grid.voxel_size, 8.0 * static_cast<double>(encoded->file.geometry.size()) / voxels);
+  if (encoded->grid.has_color()) {
+    std::fprintf(stderr, ", colors (%s) %.3f bits/voxel at PSNR-Y %.2f dB", ColorCodecName(encoded->colors.codec),
+                 8.0 * static_cast<double>(encoded->file.colors.size()) / voxels, encoded->colors.psnr.y);
+  }
+  std::fprintf(stderr, "\n");
   return 0;
 }
 
@@ -112,13 +140,16 @@ int RunInfo(const std::string& input, bool json) {
   std::printf("voxels      %zu (%zu unique DAG nodes)\n", voxels, decoded->dag.UniqueNodeCount());
   std::printf("geometry    %zu bytes, %.3f bits/voxel (%s)\n", file->geometry.size(),
               out["bits_per_voxel"]["geometry"].get<double>(), m.value("/codec/geometry"_json_pointer, std::string("?")).c_str());
-  std::printf("colors      %zu bytes, %.3f bits/voxel (%s)\n", file->colors.size(),
-              out["bits_per_voxel"]["colors"].get<double>(), m.value("/codec/colors"_json_pointer, std::string("?")).c_str());
+  std::printf("colors      %zu bytes, %.3f bits/voxel (%s", file->colors.size(), out["bits_per_voxel"]["colors"].get<double>(),
+              m.value("/codec/colors/codec"_json_pointer, std::string("?")).c_str());
+  if (m.contains("/codec/colors/psnr_y"_json_pointer)) std::printf(", PSNR-Y %.2f dB", m["codec"]["colors"]["psnr_y"].get<double>());
+  std::printf(")\n");
   const std::string wkt = m.value("/crs/wkt"_json_pointer, std::string());
   std::printf("crs         %s\n", wkt.empty() ? "none (local frame)" : (wkt.substr(0, 72) + (wkt.size() > 72 ? "..." : "")).c_str());
   return 0;
 }
 
+// The scorecard: geometry, every color codec at 30/34/38/42 dB and lossless, Draco on the same voxels.
 int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   auto encoded = EncodeScan(input, MakeEncodeOptions(choice, input));
   if (!encoded.ok()) return Fail(encoded.status());
@@ -129,7 +160,33 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   const double voxels = static_cast<double>(encoded->grid.morton.size());
   const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
   const double geometry = bpv(std::min(encoded->file.geometry.size(), zstd_stream->size()));
-  const double colors = bpv(encoded->file.colors.size());
+
+  nlohmann::json codecs = nlohmann::json::array();
+  if (encoded->grid.has_color()) {
+    struct Trial {
+      ColorCodec codec;
+      std::optional<double> target;
+    };
+    std::vector<Trial> trials;
+    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+      for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target});
+    }
+    trials.push_back({ColorCodec::kLossless, std::nullopt});
+    trials.push_back({ColorCodec::kRaw, std::nullopt});
+    for (const Trial& t : trials) {
+      auto colors = EncodeColors(encoded->grid.colors, {t.codec, t.target});
+      if (!colors.ok()) return Fail(colors.status());
+      const double color_bits = bpv(colors->bytes.size());
+      codecs.push_back({{"name", ColorCodecName(t.codec)},
+                        {"target_psnr", t.target ? nlohmann::json(*t.target) : nlohmann::json()},
+                        {"psnr_y", std::isfinite(colors->psnr.y) ? nlohmann::json(colors->psnr.y) : nlohmann::json()},
+                        {"psnr_rgb", std::isfinite(colors->psnr.rgb) ? nlohmann::json(colors->psnr.rgb) : nlohmann::json()},
+                        {"lossless", !std::isfinite(colors->psnr.y)},
+                        {"color_bits_per_voxel", color_bits},
+                        {"total_bits_per_voxel", geometry + color_bits},
+                        {"draco_over_ours", draco->bits_per_point / (geometry + color_bits)}});
+    }
+  }
   nlohmann::json out = {
       {"input", input},
       {"points", encoded->grid.points_in},
@@ -141,11 +198,9 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
                     {"stored_context_bits_per_voxel", bpv(encoded->file.geometry.size())},
                     {"stored_zstd_bits_per_voxel", bpv(zstd_stream->size())},
                     {"unique_nodes", encoded->dag.UniqueNodeCount()}}},
-      {"color_bits_per_voxel", colors},
-      {"total_bits_per_voxel", geometry + colors},
       {"draco_bits_per_point", draco->bits_per_point},
       {"draco", {{"bytes", draco->bytes}, {"method", draco->method}, {"speed", draco->speed}}},
-      {"ratio_draco_to_ours", draco->bits_per_point / (geometry + colors)},
+      {"codecs", codecs},
   };
   if (json) {
     std::cout << out.dump(2) << "\n";
@@ -154,14 +209,21 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   std::printf("%s: %llu points -> %zu voxels (depth %d, voxel %.6g)\n", input.c_str(),
               static_cast<unsigned long long>(encoded->grid.points_in), encoded->grid.morton.size(), encoded->grid.depth,
               encoded->grid.voxel_size);
-  std::printf("  %-34s %10s\n", "", "bits/voxel");
-  std::printf("  %-34s %10.3f\n", "geometry, resident SVDAG", out["geometry"]["resident_bits_per_voxel"].get<double>());
-  std::printf("  %-34s %10.3f\n", "geometry, stored (zstd)", out["geometry"]["stored_zstd_bits_per_voxel"].get<double>());
-  std::printf("  %-34s %10.3f\n", "geometry, stored (context coder)", out["geometry"]["stored_context_bits_per_voxel"].get<double>());
-  std::printf("  %-34s %10.3f\n", "colors (raw RGB8)", colors);
-  std::printf("  %-34s %10.3f\n", "pointdag total", geometry + colors);
-  std::printf("  %-34s %10.3f  (%s, speed %d)\n", "Draco, lossless, same voxels", draco->bits_per_point,
-              draco->method.c_str(), draco->speed);
+  std::printf("  geometry bits/voxel: resident SVDAG %.3f, stored zstd %.3f, stored context coder %.3f\n",
+              out["geometry"]["resident_bits_per_voxel"].get<double>(), out["geometry"]["stored_zstd_bits_per_voxel"].get<double>(),
+              out["geometry"]["stored_context_bits_per_voxel"].get<double>());
+  std::printf("  Draco, lossless, same voxels: %.3f bits/point (%s, speed %d)\n", draco->bits_per_point, draco->method.c_str(),
+              draco->speed);
+  if (!codecs.empty()) {
+    std::printf("  %-9s %8s %8s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "color b/vox", "total b/vox", "Draco / ours");
+    for (const auto& c : codecs) {
+      const std::string target = c["target_psnr"].is_null() ? "-" : std::to_string(c["target_psnr"].get<int>()) + " dB";
+      const std::string psnr = c["psnr_y"].is_null() ? "exact" : std::to_string(c["psnr_y"].get<double>()).substr(0, 5);
+      std::printf("  %-9s %8s %8s %12.3f %12.3f %13.2fx\n", c["name"].get<std::string>().c_str(), target.c_str(), psnr.c_str(),
+                  c["color_bits_per_voxel"].get<double>(), c["total_bits_per_voxel"].get<double>(),
+                  c["draco_over_ours"].get<double>());
+    }
+  }
   return 0;
 }
 
@@ -178,6 +240,14 @@ int Main(int argc, char** argv) {
   encode->add_option("-o,--output", output, "output .pdag")->required();
   AddGridOptions(encode, grid);
   encode->add_option("--coder", coder_name, "geometry entropy coder")->check(CLI::IsMember({"context", "zstd"}));
+  ColorChoice color_choice;
+  auto* quality = encode->add_option("--quality", color_choice.quality,
+                                     "target color PSNR-Y in dB (lossy; vbr unless --color-codec fixed3)")
+                      ->check(CLI::Range(10.0, 99.0));
+  auto* lossless = encode->add_flag("--lossless", color_choice.lossless, "keep colors exact (the default)");
+  quality->excludes(lossless);
+  encode->add_option("--color-codec", color_choice.codec, "raw, lossless, fixed3 or vbr (fixed3/vbr default to 38 dB)")
+      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr"}));
 
   auto* decode = app.add_subcommand("decode", "write a .pdag's voxels (centres + colors) as PLY");
   decode->add_option("input", input, ".pdag file")->required();
@@ -210,7 +280,14 @@ int Main(int argc, char** argv) {
       return 2;
     }
   }
-  if (encode->parsed()) return RunEncode(input, output, grid, coder_name == "zstd" ? GeometryCoder::kZstd : GeometryCoder::kContext);
+  if (encode->parsed()) {
+    auto colors = MakeColorOptions(color_choice);
+    if (!colors.ok()) {
+      std::cerr << "pointdag encode: " << colors.status().message() << "\n";
+      return 2;
+    }
+    return RunEncode(input, output, grid, coder_name == "zstd" ? GeometryCoder::kZstd : GeometryCoder::kContext, *colors);
+  }
   if (decode->parsed()) return RunDecode(input, output);
   if (info->parsed()) return RunInfo(input, json);
   if (compare->parsed()) return RunCompare(input, grid, json);

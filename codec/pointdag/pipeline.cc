@@ -43,7 +43,19 @@ Status Require(const nlohmann::json& meta, const char* key, T& out) {
 }  // namespace
 
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
-                            const Svdag& dag, GeometryCoder coder) {
+                            const Svdag& dag, GeometryCoder coder, const EncodedColors& colors,
+                            const ColorEncodeOptions& color_options) {
+  nlohmann::json color = {{"codec", grid.has_color() ? ColorCodecName(colors.codec) : "none"}};
+  if (grid.has_color()) {
+    color["target_psnr_y"] = color_options.target_psnr_y ? nlohmann::json(*color_options.target_psnr_y) : nlohmann::json();
+    const bool lossy = colors.codec == ColorCodec::kFixedRate || colors.codec == ColorCodec::kVariableRate;
+    if (lossy) {
+      color["max_mse"] = colors.max_mse;
+      color["blocks"] = colors.blocks;
+      color["psnr_y"] = colors.psnr.y;
+      color["psnr_rgb"] = colors.psnr.rgb;
+    }
+  }
   const double side = grid.voxel_size * std::ldexp(1.0, grid.depth);
   nlohmann::json source = {{"name", source_name},
                            {"format", ScanFormatName(scan.format)},
@@ -65,7 +77,7 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
       {"has_color", grid.has_color()},
       {"codec", {{"geometry", GeometryCoderName(coder)},
                  {"count_mode", dag.mode == CountMode::kMipmap ? "mipmap" : "leaves"},
-                 {"colors", grid.has_color() ? "raw-rgb8" : "none"}}},
+                 {"colors", color}}},
   };
 }
 
@@ -101,9 +113,16 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
 
   start = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));
-  out.file.meta = DescribeScan(input.filename().string(), out.scan, out.grid, out.dag, options.geometry_coder);
-  for (const Rgb8& c : out.grid.colors) out.file.colors.insert(out.file.colors.end(), {c.r, c.g, c.b});
   out.seconds.encode = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  if (out.grid.has_color()) {
+    ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
+    out.file.colors = out.colors.bytes;
+  }
+  out.seconds.colors = SecondsSince(start);
+  out.file.meta = DescribeScan(input.filename().string(), out.scan, out.grid, out.dag, options.geometry_coder,
+                               out.colors, options.colors);
   return out;
 }
 
@@ -128,11 +147,7 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file) {
   if (out.grid.morton.size() != voxels) return Corrupt(".pdag metadata voxel count disagrees with its geometry");
   out.grid.points_in = out.meta.value("/source/points"_json_pointer, uint64_t{0});
   if (!file.colors.empty()) {
-    if (file.colors.size() != 3 * voxels) return Corrupt(".pdag colors section does not hold one RGB per voxel");
-    out.grid.colors.resize(voxels);
-    for (size_t i = 0; i < voxels; ++i) {
-      out.grid.colors[i] = {file.colors[3 * i], file.colors[3 * i + 1], file.colors[3 * i + 2]};
-    }
+    ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels));
   }
   return out;
 }

@@ -1,16 +1,18 @@
 // The codec's front door: scan file -> .pdag and back, stage by stage.
 //
 //   read (read/) -> voxelize (voxelize/) -> build DAG (dag/dag_builder) -> stored form
-//   (dag/dag_stream) -> container (container/)
+//   (dag/dag_stream) -> colors (color/) -> container (container/)
 //
-// Georeferencing, color codecs and tiling join this pipeline in later stages; today the colors
-// section holds raw 8-bit RGB in color-index (Morton) order.
+//   colors (color/): raw, lossless, or the block codecs of Papers IIA/IIB at a target PSNR
+//
+// Georeferencing and tiling join this pipeline in later stages.
 #pragma once
 
 #include <filesystem>
 #include <optional>
 #include <string>
 
+#include "pointdag/color/color_codec.h"
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/dag/dag_stream.h"
 #include "pointdag/dag/svdag.h"
@@ -23,6 +25,7 @@ struct EncodeOptions {
   std::optional<double> voxel_size;  // exactly one of voxel_size and depth
   std::optional<int> depth;
   GeometryCoder geometry_coder = GeometryCoder::kContext;
+  ColorEncodeOptions colors{ColorCodec::kLossless, std::nullopt};
   uint64_t max_points_in_memory = uint64_t{1} << 25;  // above it, voxelize and build chunk by chunk
   std::filesystem::path spill_dir;                    // chunk files; empty: the system's temp folder
   ProgressFn progress;
@@ -31,7 +34,8 @@ struct EncodeOptions {
 struct StageSeconds {
   double read_voxelize = 0;  // reading, quantizing, sorting and averaging
   double build = 0;          // DAG building and merging (interleaved with voxelizing when chunked)
-  double encode = 0;
+  double encode = 0;         // geometry stored form
+  double colors = 0;         // color codec, including its quality search
 };
 
 struct EncodedScan {
@@ -39,6 +43,7 @@ struct EncodedScan {
   VoxelGrid grid;
   Svdag dag;
   PdagFile file;
+  EncodedColors colors;  // empty bytes when the scan has no color
   StageSeconds seconds;
 };
 
@@ -46,7 +51,8 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
 
 // Metadata JSON for a voxelized scan (source, CRS, grid, counts, codec parameters).
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
-                            const Svdag& dag, GeometryCoder coder);
+                            const Svdag& dag, GeometryCoder coder, const EncodedColors& colors,
+                            const ColorEncodeOptions& color_options);
 
 struct DecodedPdag {
   nlohmann::json meta;

@@ -2,6 +2,7 @@
 #include <sys/wait.h>
 
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "pointdag/read/scan_reader.h"
 #include "test_util.h"
@@ -45,7 +46,8 @@ TEST(Cli, EncodeInfoDecodeRoundTrip) {
   EXPECT_EQ(json["voxels"], 36931);
   EXPECT_EQ(json["depth"], 9);
   EXPECT_GT(json["sections"]["geometry"].get<int>(), 0);
-  EXPECT_EQ(json["sections"]["colors"], 3 * 36931);
+  EXPECT_GT(json["sections"]["colors"].get<int>(), 0);
+  EXPECT_EQ(json["meta"]["codec"]["colors"]["codec"], "lossless");  // nothing is degraded unless asked
   EXPECT_EQ(json["file_bytes"], std::filesystem::file_size(pdag));
 
   const CliRun text_info = Cli("info " + pdag, dir);
@@ -72,7 +74,46 @@ TEST(Cli, CompareReportsUsAndDracoOnTheSameVoxels) {
   EXPECT_GT(json["voxels"].get<int>(), 0);
   EXPECT_GT(json["geometry_bits_per_voxel"].get<double>(), 0.0);
   EXPECT_GT(json["draco_bits_per_point"].get<double>(), 0.0);
-  EXPECT_EQ(json["color_bits_per_voxel"], 24.0);
+  std::set<std::pair<std::string, int>> seen;
+  for (const auto& codec : json["codecs"]) {
+    const std::string name = codec["name"];
+    if (codec["target_psnr"].is_null()) {
+      EXPECT_TRUE(codec["lossless"].get<bool>()) << name;
+      if (name == "raw") {
+        EXPECT_NEAR(codec["color_bits_per_voxel"].get<double>(), 24.0, 0.01);  // plus the codec's id byte
+      }
+      seen.insert({name, 0});
+    } else {
+      EXPECT_GE(codec["psnr_y"].get<double>(), codec["target_psnr"].get<double>()) << name;
+      seen.insert({name, codec["target_psnr"].get<int>()});
+    }
+    EXPECT_GT(codec["color_bits_per_voxel"].get<double>(), 0.0);
+  }
+  for (const char* name : {"vbr", "fixed3"}) {
+    for (int target : {30, 34, 38, 42}) EXPECT_EQ(seen.count({name, target}), 1u) << name << " " << target;
+  }
+  EXPECT_EQ(seen.count({"lossless", 0}), 1u);
+}
+
+TEST(Cli, QualityFlagStoresLossyColorsThatMeetTheTarget) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const auto pdag = (dir / "q.pdag").string();
+  const CliRun encode = Cli("encode " + (DataDir() / "autzen_trim_pdrf3_rgb.las").string() + " -o " + pdag +
+                                " --voxel 4 --quality 34",
+                            dir);
+  ASSERT_EQ(encode.exit_code, 0) << encode.err;
+  EXPECT_NE(encode.err.find("colors (vbr)"), std::string::npos) << encode.err;
+  const auto info = nlohmann::json::parse(Cli("info " + pdag + " --json", dir).out);
+  EXPECT_EQ(info["meta"]["codec"]["colors"]["codec"], "vbr");
+  EXPECT_GE(info["meta"]["codec"]["colors"]["psnr_y"].get<double>(), 34.0);
+  EXPECT_LT(info["sections"]["colors"].get<int>(), 36931);  // under a byte per voxel
+  EXPECT_EQ(Cli("decode " + pdag + " -o " + (dir / "q.ply").string(), dir).exit_code, 0);
+  // A lossless codec with a quality target is a usage error.
+  EXPECT_EQ(Cli("encode " + (DataDir() / "tiny_1.2-with-color_1065pts.las").string() + " -o x.pdag --depth 6 "
+                "--quality 30 --color-codec lossless", dir).exit_code, 2);
+  EXPECT_EQ(Cli("encode " + (DataDir() / "tiny_1.2-with-color_1065pts.las").string() + " -o x.pdag --depth 6 "
+                "--quality 30 --lossless", dir).exit_code, 2);
 }
 
 TEST(Cli, ExitCodesAreOneForBadInputAndTwoForUsage) {

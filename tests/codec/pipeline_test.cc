@@ -105,7 +105,7 @@ TEST(Pipeline, CompressedSizesAreStable) {
   EXPECT_EQ(encoded->file.geometry.size(), 10049u);
   EXPECT_EQ(EncodeDag(encoded->dag, GeometryCoder::kZstd)->size(), 10408u);
   EXPECT_EQ(encoded->dag.ResidentBytes(), 33972u);
-  EXPECT_EQ(SerializePdag(encoded->file).size(), 122641u);
+  EXPECT_EQ(SerializePdag(encoded->file).size(), 84872u);
 }
 
 TEST(Pipeline, DecodeRejectsMetadataThatContradictsTheData) {

@@ -1,0 +1,75 @@
+// Stage 5b: palette-free block color codecs (Papers IIA and IIB), paired encoder/decoder.
+//
+// Colors are in color-index order (Morton order of the voxels, or DAG pre-order for mipmaps), which
+// keeps neighbours in space neighbours in the array. The array is cut into macro blocks of 16384
+// colors, coded independently (Paper IIB; we apply it to the fixed-rate codec too, so that both
+// share one decoder and every macro block can be encoded on its own, e.g. by one GPU workgroup).
+//
+// Fixed rate (IIA): every color gets a 3-bit weight. Encoding starts from one block per color; each
+// pass walks the blocks and merges each with its left or right neighbour, whichever merged block has
+// the lower MSE, if that MSE stays within the threshold; a block merges at most once per pass;
+// passes repeat until one merges nothing.
+// Variable rate (IIB): the same merging with 0 bits per weight gives the tree's leaves; merging
+// those with 1 bit gives their parents, and so on up to 4 bits. The tree is then cut bottom-up,
+// keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
+// threshold, so every cut does.
+//
+// Decoding one color touches one macro-block entry, a binary search over that macro block's block
+// starts, and one weight: no other block is read.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pointdag/color/block_fit.h"
+#include "pointdag/status.h"
+
+namespace pointdag {
+
+constexpr uint32_t kMacroBlockColors = 16384;
+constexpr int kFixedRateBits = 3;
+
+struct ColorBlock {
+  uint32_t start = 0;   // index of its first color
+  uint32_t length = 0;
+  uint8_t bits = 0;     // bits per weight, 0..4
+  Endpoints ends;
+};
+
+enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
+
+// `max_mse` bounds each block's mean squared error per channel (0 keeps every color exact where the
+// model allows). Blocks come out sorted, covering every color once, never across macro blocks.
+std::vector<ColorBlock> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);
+
+// The stored form: block table and weights, zstd-compressed (layout: proto/PDAG_FORMAT.md §3).
+StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
+                                               BlockLayout layout);
+
+// Resident form for random access and batch decoding.
+class BlockColorDecoder {
+ public:
+  static StatusOr<BlockColorDecoder> Open(std::span<const uint8_t> stored);
+
+  uint64_t size() const { return count_; }
+  size_t block_count() const { return starts_.size(); }
+  Rgb8 At(uint64_t index) const;                            // index < size()
+  void Decode(uint64_t begin, uint64_t end, Rgb8* out) const;  // colors [begin, end)
+  std::vector<Rgb8> DecodeAll() const;
+  size_t ResidentBytes() const;
+
+ private:
+  uint32_t Weight(uint64_t bit_offset, int bits) const;
+  Rgb8 FromBlock(size_t block, uint64_t index) const;
+
+  uint64_t count_ = 0;
+  std::vector<uint32_t> starts_;
+  std::vector<uint64_t> weight_offsets_;  // bit offset of each block's first weight
+  std::vector<uint8_t> bits_;
+  std::vector<Endpoints> ends_;
+  std::vector<uint32_t> macro_first_block_;  // per macro block, plus one past the end
+  std::vector<uint64_t> weights_;            // packed LSB-first, with one word of padding
+};
+
+}  // namespace pointdag

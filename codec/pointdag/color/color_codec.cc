@@ -1,0 +1,147 @@
+#include "pointdag/color/color_codec.h"
+
+#include <zstd.h>
+
+#include <cmath>
+
+#include "pointdag/color/block_codec.h"
+
+namespace pointdag {
+namespace {
+
+constexpr int kZstdLevel = 19;
+constexpr int kSearchSteps = 8;
+
+StatusOr<std::vector<uint8_t>> LosslessPayload(std::span<const Rgb8> colors) {
+  // Planar differences: neighbours in Morton order are usually alike, so most bytes are near zero.
+  std::vector<uint8_t> planes(3 * colors.size());
+  for (size_t i = 0; i < colors.size(); ++i) {
+    const Rgb8 prev = i ? colors[i - 1] : Rgb8{};
+    planes[i] = static_cast<uint8_t>(colors[i].r - prev.r);
+    planes[colors.size() + i] = static_cast<uint8_t>(colors[i].g - prev.g);
+    planes[2 * colors.size() + i] = static_cast<uint8_t>(colors[i].b - prev.b);
+  }
+  std::vector<uint8_t> z(ZSTD_compressBound(planes.size()));
+  const size_t n = ZSTD_compress(z.data(), z.size(), planes.data(), planes.size(), kZstdLevel);
+  if (ZSTD_isError(n)) return Internal(std::string("zstd: ") + ZSTD_getErrorName(n));
+  z.resize(n);
+  return z;
+}
+
+StatusOr<std::vector<Rgb8>> DecodeLossless(std::span<const uint8_t> payload, uint64_t count) {
+  const unsigned long long size = ZSTD_getFrameContentSize(payload.data(), payload.size());
+  if (size != 3 * count) return Corrupt("lossless colors do not hold one RGB per voxel");
+  std::vector<uint8_t> planes(size);
+  const size_t n = ZSTD_decompress(planes.data(), planes.size(), payload.data(), payload.size());
+  if (ZSTD_isError(n) || n != size) return Corrupt("lossless colors fail to decompress");
+  std::vector<Rgb8> colors(count);
+  Rgb8 prev{};
+  for (size_t i = 0; i < count; ++i) {
+    prev = {static_cast<uint8_t>(prev.r + planes[i]), static_cast<uint8_t>(prev.g + planes[count + i]),
+            static_cast<uint8_t>(prev.b + planes[2 * count + i])};
+    colors[i] = prev;
+  }
+  return colors;
+}
+
+StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, ColorCodec codec, double max_mse) {
+  const BlockLayout layout = codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
+  const auto blocks = EncodeBlocks(colors, layout, max_mse);
+  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, layout));
+  ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream));
+  EncodedColors out;
+  out.codec = codec;
+  out.max_mse = max_mse;
+  out.blocks = blocks.size();
+  out.psnr = MeasureColorPsnr(colors, decoder.DecodeAll());
+  out.bytes.push_back(static_cast<uint8_t>(codec));
+  out.bytes.insert(out.bytes.end(), stream.begin(), stream.end());
+  return out;
+}
+
+}  // namespace
+
+const char* ColorCodecName(ColorCodec codec) {
+  switch (codec) {
+    case ColorCodec::kRaw: return "raw";
+    case ColorCodec::kLossless: return "lossless";
+    case ColorCodec::kFixedRate: return "fixed3";
+    case ColorCodec::kVariableRate: return "vbr";
+  }
+  return "?";
+}
+
+StatusOr<ColorCodec> ParseColorCodec(const std::string& name) {
+  for (ColorCodec c : {ColorCodec::kRaw, ColorCodec::kLossless, ColorCodec::kFixedRate, ColorCodec::kVariableRate}) {
+    if (name == ColorCodecName(c)) return c;
+  }
+  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr)");
+}
+
+StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
+  if (colors.empty()) return InvalidArgument("no colors to encode");
+  if (options.codec == ColorCodec::kRaw || options.codec == ColorCodec::kLossless) {
+    if (options.target_psnr_y) return InvalidArgument("a PSNR target needs a lossy codec (fixed3 or vbr)");
+    EncodedColors out;
+    out.codec = options.codec;
+    out.psnr = MeasureColorPsnr(colors, colors);
+    out.bytes.push_back(static_cast<uint8_t>(options.codec));
+    if (options.codec == ColorCodec::kRaw) {
+      for (const Rgb8& c : colors) out.bytes.insert(out.bytes.end(), {c.r, c.g, c.b});
+    } else {
+      ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, LosslessPayload(colors));
+      out.bytes.insert(out.bytes.end(), payload.begin(), payload.end());
+    }
+    return out;
+  }
+  if (!options.target_psnr_y) return EncodeBlocksAt(colors, options.codec, options.max_mse);
+
+  const double target = *options.target_psnr_y;
+  if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
+  // Bracket: the per-channel MSE the target allows is a natural first guess; a threshold of 0
+  // keeps every color exact (blocks of identical colors only), so the low end always passes.
+  const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
+  double lo = 0, hi = allowed * 8;
+  ASSIGN_OR_RETURN(EncodedColors best, EncodeBlocksAt(colors, options.codec, allowed / 2));
+  if (best.psnr.y >= target) {
+    lo = allowed / 2;
+  } else {
+    hi = allowed / 2;
+    ASSIGN_OR_RETURN(best, EncodeBlocksAt(colors, options.codec, 0));
+  }
+  for (int step = 0; step < kSearchSteps; ++step) {
+    const double mid = lo > 0 ? std::sqrt(lo * hi) : hi / 8;  // geometric once a passing point is known
+    ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, options.codec, mid));
+    if (trial.psnr.y >= target) {
+      lo = mid;
+      if (trial.bytes.size() <= best.bytes.size()) best = std::move(trial);
+    } else {
+      hi = mid;
+    }
+  }
+  return best;
+}
+
+StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count) {
+  if (section.empty()) return Truncated("colors section is empty");
+  const auto payload = section.subspan(1);
+  switch (static_cast<ColorCodec>(section[0])) {
+    case ColorCodec::kRaw: {
+      if (payload.size() != 3 * count) return Corrupt("raw colors do not hold one RGB per voxel");
+      std::vector<Rgb8> colors(count);
+      for (size_t i = 0; i < count; ++i) colors[i] = {payload[3 * i], payload[3 * i + 1], payload[3 * i + 2]};
+      return colors;
+    }
+    case ColorCodec::kLossless:
+      return DecodeLossless(payload, count);
+    case ColorCodec::kFixedRate:
+    case ColorCodec::kVariableRate: {
+      ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload));
+      if (decoder.size() != count) return Corrupt("colors section holds a different number of colors than voxels");
+      return decoder.DecodeAll();
+    }
+  }
+  return Corrupt("colors section names unknown codec " + std::to_string(section[0]));
+}
+
+}  // namespace pointdag

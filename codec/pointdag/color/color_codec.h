@@ -1,0 +1,43 @@
+// Stage 5: the colors section, whichever codec codes it, and the quality knob.
+//
+// Codecs: "raw" (24 bits), "lossless" (per-channel differences along the color order, zstd), and the
+// block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB). A target PSNR-Y makes the encoder search
+// the block codecs' MSE threshold: bisection on its logarithm, keeping the largest threshold whose
+// decoded colors still meet the target, so the target is met by construction (measured, not
+// predicted). The stored section starts with the codec's id byte (proto/PDAG_FORMAT.md §3).
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "pointdag/color/color_metrics.h"
+#include "pointdag/status.h"
+
+namespace pointdag {
+
+enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3 };
+const char* ColorCodecName(ColorCodec codec);
+StatusOr<ColorCodec> ParseColorCodec(const std::string& name);
+
+struct ColorEncodeOptions {
+  ColorCodec codec = ColorCodec::kVariableRate;
+  std::optional<double> target_psnr_y;  // dB; block codecs only
+  double max_mse = 16.0;                // per-channel MSE bound of a block when no target is given
+};
+
+struct EncodedColors {
+  std::vector<uint8_t> bytes;  // the colors section
+  ColorCodec codec = ColorCodec::kRaw;
+  double max_mse = 0;          // the threshold used (block codecs)
+  ColorPsnr psnr;              // of the decoded colors against the input
+  size_t blocks = 0;
+};
+
+StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options);
+
+// Decodes a colors section that must hold `count` colors.
+StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count);
+
+}  // namespace pointdag
