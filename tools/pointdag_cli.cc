@@ -32,6 +32,7 @@ int Fail(const Status& status) {
 struct GridChoice {
   std::optional<double> voxel;
   std::optional<int> depth;
+  bool mipmap = false;
   uint64_t chunk_points = EncodeOptions{}.max_points_in_memory;
 };
 
@@ -44,6 +45,7 @@ void AddGridOptions(CLI::App* cmd, GridChoice& choice) {
                   "most points sorted in memory; larger scans go through spatial chunks on disk")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  cmd->add_flag("--mipmap", choice.mipmap, "give internal DAG nodes colors too (mean of their children), for LOD");
 }
 
 EncodeOptions MakeEncodeOptions(const GridChoice& choice, const std::string& input) {
@@ -51,6 +53,7 @@ EncodeOptions MakeEncodeOptions(const GridChoice& choice, const std::string& inp
   options.voxel_size = choice.voxel;
   options.depth = choice.depth;
   options.max_points_in_memory = choice.chunk_points;
+  options.mipmap = choice.mipmap;
   options.progress = MakeProgressBar(input);
   return options;
 }

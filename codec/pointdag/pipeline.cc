@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "pointdag/color/mip_colors.h"
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/voxelize/morton.h"
 
@@ -96,7 +97,9 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
   vopt.on_chunk = [&](const VoxelGrid& grid, size_t first_voxel) -> Status {
     const auto chunk_start = std::chrono::steady_clock::now();
     if (!merger) {
-      ASSIGN_OR_RETURN(DagMerger created, DagMerger::Create(grid.depth, grid.chunk_levels));
+      DagBuildOptions dag_options;
+      dag_options.mode = options.mipmap ? CountMode::kMipmap : CountMode::kLeaves;
+      ASSIGN_OR_RETURN(DagMerger created, DagMerger::Create(grid.depth, grid.chunk_levels, dag_options));
       merger.emplace(std::move(created));
     }
     const Status status = merger->AddChunk(std::span(grid.morton).subspan(first_voxel));
@@ -117,7 +120,12 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
 
   start = std::chrono::steady_clock::now();
   if (out.grid.has_color()) {
-    ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
+    if (options.mipmap) {
+      const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors));
+    } else {
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
+    }
     out.file.colors = out.colors.bytes;
   }
   out.seconds.colors = SecondsSince(start);
@@ -147,7 +155,12 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file) {
   if (out.grid.morton.size() != voxels) return Corrupt(".pdag metadata voxel count disagrees with its geometry");
   out.grid.points_in = out.meta.value("/source/points"_json_pointer, uint64_t{0});
   if (!file.colors.empty()) {
-    ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels));
+    if (out.dag.mode == CountMode::kMipmap) {
+      ASSIGN_OR_RETURN(out.mip_colors, DecodeColors(file.colors, out.dag.RootCount()));
+      for (uint64_t i : MipVoxelIndices(out.grid.morton, out.grid.depth)) out.grid.colors.push_back(out.mip_colors[i]);
+    } else {
+      ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels));
+    }
   }
   return out;
 }

@@ -26,6 +26,7 @@ struct EncodeOptions {
   std::optional<int> depth;
   GeometryCoder geometry_coder = GeometryCoder::kContext;
   ColorEncodeOptions colors{ColorCodec::kLossless, std::nullopt};
+  bool mipmap = false;  // DAG counts nodes and internal nodes get colors too (Paper IIB)
   uint64_t max_points_in_memory = uint64_t{1} << 25;  // above it, voxelize and build chunk by chunk
   std::filesystem::path spill_dir;                    // chunk files; empty: the system's temp folder
   ProgressFn progress;
@@ -57,7 +58,8 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
 struct DecodedPdag {
   nlohmann::json meta;
   Svdag dag;
-  VoxelGrid grid;  // Morton codes from the DAG, colors from the colors section
+  VoxelGrid grid;               // Morton codes from the DAG, voxel colors from the colors section
+  std::vector<Rgb8> mip_colors;  // mipmap mode: every node's color in pre-order (index = MipColorIndex)
 };
 
 StatusOr<DecodedPdag> DecodePdag(const PdagFile& file);

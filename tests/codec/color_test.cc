@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/color_codec.h"
@@ -233,6 +234,73 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 12755u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 13176u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, {ColorCodec::kLossless, std::nullopt})->bytes.size(), 72993u);
+}
+
+}  // namespace
+}  // namespace pointdag
+
+#include "pointdag/color/mip_colors.h"
+#include "pointdag/dag/dag_builder.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+TEST(MipColors, EveryNodeIsTheMeanOfItsChildrenAtItsDagIndex) {
+  const int depth = 6;
+  const auto codes = testing::SurfaceVoxels(depth, 3000, 12);
+  const auto colors = SyntheticColors(codes.size(), 2);
+  DagBuildOptions mip;
+  mip.mode = CountMode::kMipmap;
+  const Svdag dag = BuildDag(codes, depth, mip).value();
+  const MipColors m = BuildMipColors(codes, colors, depth);
+  ASSERT_EQ(m.colors.size(), dag.RootCount());
+  ASSERT_EQ(m.voxel_index.size(), codes.size());
+  EXPECT_EQ(MipVoxelIndices(codes, depth), m.voxel_index);
+  for (size_t i = 0; i < codes.size(); ++i) {
+    const auto c = MortonDecode(codes[i]);
+    ASSERT_EQ(dag.MipColorIndex(c[0], c[1], c[2], depth), std::optional<uint64_t>(m.voxel_index[i]));
+    ASSERT_EQ(m.colors[m.voxel_index[i]], colors[i]);
+  }
+  size_t checked = 0;
+  for (int level = 0; level < depth; ++level) {
+    std::set<uint64_t> cells;
+    for (uint64_t code : codes) cells.insert(code >> (3 * (depth - level)));
+    for (uint64_t cell : cells) {
+      const auto xyz = MortonDecode(cell);
+      const auto index = dag.MipColorIndex(xyz[0], xyz[1], xyz[2], level);
+      ASSERT_TRUE(index.has_value());
+      uint32_t sum[3] = {0, 0, 0}, n = 0;
+      for (uint64_t octant = 0; octant < 8; ++octant) {
+        const auto child = MortonDecode(cell << 3 | octant);
+        if (const auto ci = dag.MipColorIndex(child[0], child[1], child[2], level + 1)) {
+          sum[0] += m.colors[*ci].r, sum[1] += m.colors[*ci].g, sum[2] += m.colors[*ci].b, ++n;
+        }
+      }
+      ASSERT_GT(n, 0u);
+      const Rgb8 mean{static_cast<uint8_t>((sum[0] + n / 2) / n), static_cast<uint8_t>((sum[1] + n / 2) / n),
+                      static_cast<uint8_t>((sum[2] + n / 2) / n)};
+      ASSERT_EQ(m.colors[*index], mean) << "level " << level;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked + codes.size(), m.colors.size());  // every node checked once
+}
+
+TEST(MipColors, MipmapPipelineRoundTripsVoxelColorsAndEveryNode) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 0.004;
+  options.mipmap = true;
+  auto encoded = EncodeScan(testing::DataDir() / "pcx_guanyin_cc-by-4.0_rgb.ply", options);
+  ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+  EXPECT_EQ(encoded->dag.mode, CountMode::kMipmap);
+  EXPECT_EQ(encoded->file.meta["codec"]["count_mode"], "mipmap");
+  auto decoded = DecodePdag(*ParsePdag(SerializePdag(encoded->file)));
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  EXPECT_EQ(decoded->grid.colors, encoded->grid.colors);  // lossless by default
+  EXPECT_EQ(decoded->mip_colors.size(), decoded->dag.RootCount());
+  EXPECT_EQ(decoded->mip_colors, BuildMipColors(encoded->grid.morton, encoded->grid.colors, encoded->grid.depth).colors);
 }
 
 }  // namespace

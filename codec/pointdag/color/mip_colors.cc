@@ -1,0 +1,73 @@
+#include "pointdag/color/mip_colors.h"
+
+#include <array>
+#include <cmath>
+
+namespace pointdag {
+namespace {
+
+constexpr uint32_t kNoParent = ~uint32_t{0};
+
+// Walks the octree nodes in pre-order from the sorted codes: voxel i starts new nodes from the
+// level where its path leaves voxel i-1's. Calls visit(level, parent) per node, in order.
+template <typename Visit>
+void ForEachPreorderNode(std::span<const uint64_t> morton, int depth, Visit&& visit) {
+  std::array<uint32_t, 23> last_at_level{};  // pre-order index of the latest node of each level
+  uint32_t next = 0;
+  for (size_t i = 0; i < morton.size(); ++i) {
+    int first_new = 0;
+    if (i > 0) {
+      const int top_bit = 63 - __builtin_clzll(morton[i] ^ morton[i - 1]);
+      first_new = depth - top_bit / 3;  // levels below the deepest common ancestor are new
+    }
+    for (int level = first_new; level <= depth; ++level) {
+      visit(level, level == 0 ? kNoParent : last_at_level[level - 1]);
+      last_at_level[level] = next++;
+    }
+  }
+}
+
+}  // namespace
+
+MipColors BuildMipColors(std::span<const uint64_t> morton, std::span<const Rgb8> colors, int depth) {
+  MipColors out;
+  std::vector<uint32_t> parent;
+  std::vector<uint8_t> level_of;
+  ForEachPreorderNode(morton, depth, [&](int level, uint32_t p) {
+    if (level == depth) out.voxel_index.push_back(parent.size());
+    parent.push_back(p);
+    level_of.push_back(static_cast<uint8_t>(level));
+  });
+  // Reverse pre-order sees every child before its parent: sum children, then take the mean.
+  out.colors.resize(parent.size());
+  std::vector<std::array<uint32_t, 4>> sums(parent.size(), {0, 0, 0, 0});  // r, g, b, children
+  size_t voxel = out.voxel_index.size();
+  for (size_t n = parent.size(); n-- > 0;) {
+    Rgb8 c;
+    if (level_of[n] == depth) {
+      c = colors[--voxel];
+    } else {
+      const auto& s = sums[n];
+      const auto mean = [&](uint32_t sum) { return static_cast<uint8_t>((sum + s[3] / 2) / s[3]); };
+      c = {mean(s[0]), mean(s[1]), mean(s[2])};
+    }
+    out.colors[n] = c;
+    if (parent[n] != kNoParent) {
+      auto& ps = sums[parent[n]];
+      ps[0] += c.r, ps[1] += c.g, ps[2] += c.b, ps[3] += 1;
+    }
+  }
+  return out;
+}
+
+std::vector<uint64_t> MipVoxelIndices(std::span<const uint64_t> morton, int depth) {
+  std::vector<uint64_t> index;
+  uint64_t n = 0;
+  ForEachPreorderNode(morton, depth, [&](int level, uint32_t) {
+    if (level == depth) index.push_back(n);
+    ++n;
+  });
+  return index;
+}
+
+}  // namespace pointdag
