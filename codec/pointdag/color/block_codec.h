@@ -43,14 +43,16 @@ enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
 // model allows). Blocks come out sorted, covering every color once, never across macro blocks.
 std::vector<ColorBlock> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);
 
-// The stored form: block table and weights, zstd-compressed (layout: proto/PDAG_FORMAT.md §3).
+// The stored form: block table and weights, range-coded with adaptive models
+// (layout: proto/PDAG_FORMAT.md §3).
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout);
 
 // Resident form for random access and batch decoding.
 class BlockColorDecoder {
  public:
-  static StatusOr<BlockColorDecoder> Open(std::span<const uint8_t> stored);
+  // `expected_count`: how many colors the caller knows there are (bounds every allocation).
+  static StatusOr<BlockColorDecoder> Open(std::span<const uint8_t> stored, uint64_t expected_count);
 
   uint64_t size() const { return count_; }
   size_t block_count() const { return starts_.size(); }

@@ -48,7 +48,7 @@ StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, ColorCodec 
   const BlockLayout layout = codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
   const auto blocks = EncodeBlocks(colors, layout, max_mse);
   ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, layout));
-  ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream));
+  ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream, colors.size()));
   EncodedColors out;
   out.codec = codec;
   out.max_mse = max_mse;
@@ -136,8 +136,7 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
       return DecodeLossless(payload, count);
     case ColorCodec::kFixedRate:
     case ColorCodec::kVariableRate: {
-      ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload));
-      if (decoder.size() != count) return Corrupt("colors section holds a different number of colors than voxels");
+      ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload, count));
       return decoder.DecodeAll();
     }
   }

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/voxelize/morton.h"
 
@@ -127,42 +127,20 @@ class ZstdSource {
   bool failed_ = false;
 };
 
-// Probability models shared by the context encoder and decoder.
-// Back-references are skewed towards nodes seen early (a handful of bricks repeat everywhere), so
-// an ordinal is coded Elias-gamma style: its bit length in unary, then its top bits below the
-// leading one, each with adaptive models per height; the remaining low bits go raw.
-constexpr int kRefModelledBits = 3;
-
+// Probability models shared by the context encoder and decoder. Back-references are skewed towards
+// nodes seen early (a handful of bricks repeat everywhere), hence a gamma code per height.
 struct ContextModels {
-  std::array<std::array<BitModel, 33>, kMaskClasses> ref_length;
-  std::array<std::array<std::array<BitModel, 1 << kRefModelledBits>, 33>, kMaskClasses> ref_top;
-  std::array<std::array<BitModel, 256>, kMaskClasses> mask;  // bit-tree: node 1..255
+  std::array<BitTreeModel<8>, kMaskClasses> mask;
   std::array<BitModel, kMaskClasses> flag;
+  std::array<GammaModel, kMaskClasses> ref;
 };
 
 class ContextSink {
  public:
-  void Mask(int cls, uint8_t m) {
-    uint32_t node = 1;
-    for (int i = 7; i >= 0; --i) {
-      const int bit = (m >> i) & 1;
-      rc_.Encode(models_.mask[cls][node], bit);
-      node = node << 1 | static_cast<uint32_t>(bit);
-    }
-  }
+  void Mask(int cls, uint8_t m) { EncodeBitTree<8>(rc_, models_.mask[cls], m); }
   void Flag(int cls, bool back) { rc_.Encode(models_.flag[cls], back ? 1 : 0); }
   void Ref(int cls, uint32_t ordinal, uint32_t bound) {
-    const uint32_t v = ordinal + 1;
-    const int length = std::bit_width(v), max_length = std::bit_width(bound);
-    for (int i = 1; i < length; ++i) rc_.Encode(models_.ref_length[cls][i], 1);
-    if (length < max_length) rc_.Encode(models_.ref_length[cls][length], 0);
-    int rest = length - 1;
-    for (uint32_t node = 1; rest > 0 && node < (1u << kRefModelledBits); --rest) {
-      const int bit = static_cast<int>((v >> (rest - 1)) & 1u);
-      rc_.Encode(models_.ref_top[cls][length][node], bit);
-      node = node << 1 | static_cast<uint32_t>(bit);
-    }
-    rc_.EncodeDirect(v & ((1u << rest) - 1), rest);
+    EncodeGamma(rc_, models_.ref[cls], ordinal + 1, std::bit_width(bound));
   }
   StatusOr<std::vector<uint8_t>> Finish(std::vector<uint8_t> out) {
     const std::vector<uint8_t> payload = rc_.Finish();
@@ -178,26 +156,9 @@ class ContextSink {
 class ContextSource {
  public:
   explicit ContextSource(std::span<const uint8_t> payload) : rc_(payload) {}
-  uint8_t Mask(int cls) {
-    uint32_t node = 1;
-    for (int i = 0; i < 8; ++i) node = node << 1 | static_cast<uint32_t>(rc_.Decode(models_.mask[cls][node]));
-    return static_cast<uint8_t>(node);
-  }
+  uint8_t Mask(int cls) { return static_cast<uint8_t>(DecodeBitTree<8>(rc_, models_.mask[cls])); }
   bool Flag(int cls) { return rc_.Decode(models_.flag[cls]) != 0; }
-  uint32_t Ref(int cls, uint32_t bound) {
-    const int max_length = std::bit_width(bound);
-    int length = 1;
-    while (length < max_length && rc_.Decode(models_.ref_length[cls][length])) ++length;
-    uint32_t v = 1;
-    int rest = length - 1;
-    for (uint32_t node = 1; rest > 0 && node < (1u << kRefModelledBits); --rest) {
-      const int bit = rc_.Decode(models_.ref_top[cls][length][node]);
-      node = node << 1 | static_cast<uint32_t>(bit);
-      v = v << 1 | static_cast<uint32_t>(bit);
-    }
-    v = v << rest | rc_.DecodeDirect(rest);
-    return v - 1;
-  }
+  uint32_t Ref(int cls, uint32_t bound) { return DecodeGamma(rc_, models_.ref[cls], std::bit_width(bound)) - 1; }
   bool failed() const { return rc_.overrun(); }
 
  private:
