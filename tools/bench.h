@@ -9,6 +9,7 @@ namespace pointdag {
 struct BenchOptions {
   std::string data_dir = "../shared/data";
   bool json = false;
+  bool colors = false;  // the color codecs' rate-distortion table and decoding speed instead
   uint64_t max_points_in_memory = uint64_t{1} << 25;
 };
 

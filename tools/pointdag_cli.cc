@@ -13,7 +13,7 @@
 #include <iostream>
 
 #include "bench.h"
-#include "pointdag/compare/draco_compare.h"
+#include "pointdag/compare/scorecard.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
 #include "progress.h"
@@ -156,55 +156,11 @@ int RunInfo(const std::string& input, bool json) {
 int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   auto encoded = EncodeScan(input, MakeEncodeOptions(choice, input));
   if (!encoded.ok()) return Fail(encoded.status());
-  auto zstd_stream = EncodeDag(encoded->dag, GeometryCoder::kZstd);
-  if (!zstd_stream.ok()) return Fail(zstd_stream.status());
-  auto draco = DracoEncodeVoxels(encoded->grid);
-  if (!draco.ok()) return Fail(draco.status());
-  const double voxels = static_cast<double>(encoded->grid.morton.size());
-  const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
-  const double geometry = bpv(std::min(encoded->file.geometry.size(), zstd_stream->size()));
-
-  nlohmann::json codecs = nlohmann::json::array();
-  if (encoded->grid.has_color()) {
-    struct Trial {
-      ColorCodec codec;
-      std::optional<double> target;
-    };
-    std::vector<Trial> trials;
-    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
-      for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target});
-    }
-    trials.push_back({ColorCodec::kLossless, std::nullopt});
-    trials.push_back({ColorCodec::kRaw, std::nullopt});
-    for (const Trial& t : trials) {
-      auto colors = EncodeColors(encoded->grid.colors, {t.codec, t.target});
-      if (!colors.ok()) return Fail(colors.status());
-      const double color_bits = bpv(colors->bytes.size());
-      codecs.push_back({{"name", ColorCodecName(t.codec)},
-                        {"target_psnr", t.target ? nlohmann::json(*t.target) : nlohmann::json()},
-                        {"psnr_y", std::isfinite(colors->psnr.y) ? nlohmann::json(colors->psnr.y) : nlohmann::json()},
-                        {"psnr_rgb", std::isfinite(colors->psnr.rgb) ? nlohmann::json(colors->psnr.rgb) : nlohmann::json()},
-                        {"lossless", !std::isfinite(colors->psnr.y)},
-                        {"color_bits_per_voxel", color_bits},
-                        {"total_bits_per_voxel", geometry + color_bits},
-                        {"draco_over_ours", draco->bits_per_point / (geometry + color_bits)}});
-    }
-  }
-  nlohmann::json out = {
-      {"input", input},
-      {"points", encoded->grid.points_in},
-      {"voxels", encoded->grid.morton.size()},
-      {"depth", encoded->grid.depth},
-      {"voxel_size", encoded->grid.voxel_size},
-      {"geometry_bits_per_voxel", geometry},
-      {"geometry", {{"resident_bits_per_voxel", bpv(encoded->dag.ResidentBytes())},
-                    {"stored_context_bits_per_voxel", bpv(encoded->file.geometry.size())},
-                    {"stored_zstd_bits_per_voxel", bpv(zstd_stream->size())},
-                    {"unique_nodes", encoded->dag.UniqueNodeCount()}}},
-      {"draco_bits_per_point", draco->bits_per_point},
-      {"draco", {{"bytes", draco->bytes}, {"method", draco->method}, {"speed", draco->speed}}},
-      {"codecs", codecs},
-  };
+  auto scorecard = BuildScorecard(*encoded);
+  if (!scorecard.ok()) return Fail(scorecard.status());
+  nlohmann::json& out = *scorecard;
+  out["input"] = input;
+  const nlohmann::json& codecs = out["codecs"];
   if (json) {
     std::cout << out.dump(2) << "\n";
     return 0;
@@ -215,8 +171,8 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   std::printf("  geometry bits/voxel: resident SVDAG %.3f, stored zstd %.3f, stored context coder %.3f\n",
               out["geometry"]["resident_bits_per_voxel"].get<double>(), out["geometry"]["stored_zstd_bits_per_voxel"].get<double>(),
               out["geometry"]["stored_context_bits_per_voxel"].get<double>());
-  std::printf("  Draco, lossless, same voxels: %.3f bits/point (%s, speed %d)\n", draco->bits_per_point, draco->method.c_str(),
-              draco->speed);
+  std::printf("  Draco, lossless, same voxels: %.3f bits/point (%s, speed %d)\n", out["draco_bits_per_point"].get<double>(),
+              out["draco"]["method"].get<std::string>().c_str(), out["draco"]["speed"].get<int>());
   if (!codecs.empty()) {
     std::printf("  %-9s %8s %8s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "color b/vox", "total b/vox", "Draco / ours");
     for (const auto& c : codecs) {
@@ -269,6 +225,7 @@ int Main(int argc, char** argv) {
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
   bench->add_flag("--json", bench_options.json, "print JSON lines instead of a table");
+  bench->add_flag("--colors", bench_options.colors, "color codecs: rate-distortion table and decoding speed");
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
 
   try {

@@ -1,0 +1,55 @@
+#include "pointdag/compare/scorecard.h"
+
+#include <cmath>
+
+#include "pointdag/compare/draco_compare.h"
+
+namespace pointdag {
+
+StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
+  ASSIGN_OR_RETURN(const std::vector<uint8_t> zstd_stream, EncodeDag(scan.dag, GeometryCoder::kZstd));
+  ASSIGN_OR_RETURN(const DracoResult draco, DracoEncodeVoxels(scan.grid));
+  const double voxels = static_cast<double>(scan.grid.morton.size());
+  const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
+  const double geometry = bpv(std::min(scan.file.geometry.size(), zstd_stream.size()));
+  const auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+
+  nlohmann::json codecs = nlohmann::json::array();
+  if (scan.grid.has_color()) {
+    std::vector<ColorEncodeOptions> trials;
+    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+      for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target});
+    }
+    trials.push_back({ColorCodec::kLossless, std::nullopt});
+    trials.push_back({ColorCodec::kRaw, std::nullopt});
+    for (const ColorEncodeOptions& trial : trials) {
+      ASSIGN_OR_RETURN(const EncodedColors colors, EncodeColors(scan.grid.colors, trial));
+      const double color_bits = bpv(colors.bytes.size());
+      codecs.push_back({{"name", ColorCodecName(trial.codec)},
+                        {"target_psnr", trial.target_psnr_y ? nlohmann::json(*trial.target_psnr_y) : nlohmann::json()},
+                        {"psnr_y", finite_or_null(colors.psnr.y)},
+                        {"psnr_rgb", finite_or_null(colors.psnr.rgb)},
+                        {"lossless", !std::isfinite(colors.psnr.y)},
+                        {"blocks", colors.blocks},
+                        {"color_bits_per_voxel", color_bits},
+                        {"total_bits_per_voxel", geometry + color_bits},
+                        {"draco_over_ours", draco.bits_per_point / (geometry + color_bits)}});
+    }
+  }
+  return nlohmann::json{
+      {"points", scan.grid.points_in},
+      {"voxels", scan.grid.morton.size()},
+      {"depth", scan.grid.depth},
+      {"voxel_size", scan.grid.voxel_size},
+      {"geometry_bits_per_voxel", geometry},
+      {"geometry", {{"resident_bits_per_voxel", bpv(scan.dag.ResidentBytes())},
+                    {"stored_context_bits_per_voxel", bpv(scan.file.geometry.size())},
+                    {"stored_zstd_bits_per_voxel", bpv(zstd_stream.size())},
+                    {"unique_nodes", scan.dag.UniqueNodeCount()}}},
+      {"draco_bits_per_point", draco.bits_per_point},
+      {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}}},
+      {"codecs", codecs},
+  };
+}
+
+}  // namespace pointdag
