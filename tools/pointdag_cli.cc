@@ -62,6 +62,7 @@ struct ColorChoice {
   std::optional<double> quality;
   bool lossless = false;
   std::optional<std::string> codec;
+  std::string curve = "hilbert";
 };
 
 // --lossless (the default), --quality DB (vbr unless --color-codec says fixed3), or --color-codec.
@@ -72,8 +73,9 @@ StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
   } else if (choice.quality) {
     options.codec = ColorCodec::kVariableRate;
   }
-  const bool lossy = options.codec == ColorCodec::kFixedRate || options.codec == ColorCodec::kVariableRate;
-  if (choice.quality && !lossy) return InvalidArgument("--quality needs a lossy color codec (vbr or fixed3)");
+  const bool lossy = IsLossy(options.codec);
+  if (choice.quality && !lossy) return InvalidArgument("--quality needs a lossy color codec (vbr, fixed3, jpeg, webp)");
+  if (choice.curve == "morton") options.curve = Curve::kMorton;
   options.target_psnr_y = lossy ? std::optional<double>(choice.quality.value_or(kDefaultQualityDb)) : std::nullopt;
   return options;
 }
@@ -174,11 +176,12 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   std::printf("  Draco, lossless, same voxels: %.3f bits/point (%s, speed %d)\n", out["draco_bits_per_point"].get<double>(),
               out["draco"]["method"].get<std::string>().c_str(), out["draco"]["speed"].get<int>());
   if (!codecs.empty()) {
-    std::printf("  %-9s %8s %8s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "color b/vox", "total b/vox", "Draco / ours");
+    std::printf("  %-13s %8s %8s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "color b/vox", "total b/vox", "Draco / ours");
     for (const auto& c : codecs) {
       const std::string target = c["target_psnr"].is_null() ? "-" : std::to_string(c["target_psnr"].get<int>()) + " dB";
+      const std::string name = c["name"].get<std::string>() + (c["curve"].is_null() ? "" : "/" + c["curve"].get<std::string>());
       const std::string psnr = c["psnr_y"].is_null() ? "exact" : std::to_string(c["psnr_y"].get<double>()).substr(0, 5);
-      std::printf("  %-9s %8s %8s %12.3f %12.3f %13.2fx\n", c["name"].get<std::string>().c_str(), target.c_str(), psnr.c_str(),
+      std::printf("  %-13s %8s %8s %12.3f %12.3f %13.2fx\n", name.c_str(), target.c_str(), psnr.c_str(),
                   c["color_bits_per_voxel"].get<double>(), c["total_bits_per_voxel"].get<double>(),
                   c["draco_over_ours"].get<double>());
     }
@@ -205,8 +208,11 @@ int Main(int argc, char** argv) {
                       ->check(CLI::Range(10.0, 99.0));
   auto* lossless = encode->add_flag("--lossless", color_choice.lossless, "keep colors exact (the default)");
   quality->excludes(lossless);
-  encode->add_option("--color-codec", color_choice.codec, "raw, lossless, fixed3 or vbr (fixed3/vbr default to 38 dB)")
-      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr"}));
+  encode->add_option("--color-codec", color_choice.codec,
+                     "raw, lossless, fixed3, vbr, png, jpeg or webp (the lossy ones default to 38 dB)")
+      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr", "png", "jpeg", "webp"}));
+  encode->add_option("--curve", color_choice.curve, "2D mapping of png/jpeg/webp colors")
+      ->check(CLI::IsMember({"hilbert", "morton"}));
 
   auto* decode = app.add_subcommand("decode", "write a .pdag's voxels (centres + colors) as PLY");
   decode->add_option("input", input, ".pdag file")->required();

@@ -5,6 +5,7 @@
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/color_codec.h"
+#include "pointdag/color/image_mapping.h"
 #include "pointdag/pipeline.h"
 #include "test_util.h"
 
@@ -141,7 +142,7 @@ TEST(BlockCodec, CorruptStreamsAreErrorsNotCrashes) {
 
 TEST(ColorCodec, LosslessAndRawAreExact) {
   const auto colors = SyntheticColors(30000, 5);
-  for (ColorCodec codec : {ColorCodec::kLossless, ColorCodec::kRaw}) {
+  for (ColorCodec codec : {ColorCodec::kLossless, ColorCodec::kRaw, ColorCodec::kPng}) {
     auto encoded = EncodeColors(colors, {codec, std::nullopt});
     ASSERT_TRUE(encoded.ok());
     auto decoded = DecodeColors(encoded->bytes, colors.size());
@@ -155,9 +156,45 @@ TEST(ColorCodec, LosslessAndRawAreExact) {
   EXPECT_EQ(DecodeColors(std::vector<uint8_t>{9, 1, 2}, 1).status().code(), StatusCode::kCorrupt);
 }
 
+TEST(ImageMapping, CurvesVisitEveryTexelOnceAndHilbertStepsToNeighbours) {
+  for (uint32_t side : {1u, 2u, 16u, 64u}) {
+    for (Curve curve : {Curve::kMorton, Curve::kHilbert}) {
+      std::vector<bool> seen(side * side, false);
+      std::array<uint32_t, 2> prev{};
+      for (uint64_t i = 0; i < uint64_t{side} * side; ++i) {
+        const auto p = CurvePosition(curve, i, side);
+        ASSERT_LT(p[0], side);
+        ASSERT_LT(p[1], side);
+        ASSERT_FALSE(seen[p[1] * side + p[0]]) << CurveName(curve) << " revisits a texel";
+        seen[p[1] * side + p[0]] = true;
+        if (curve == Curve::kHilbert && i > 0) {
+          const uint32_t dx = p[0] > prev[0] ? p[0] - prev[0] : prev[0] - p[0];
+          const uint32_t dy = p[1] > prev[1] ? p[1] - prev[1] : prev[1] - p[1];
+          ASSERT_EQ(dx + dy, 1u) << "Hilbert step " << i;
+        }
+        prev = p;
+      }
+    }
+  }
+}
+
+TEST(ImageMapping, RejectsImagesThatDoNotFit) {
+  const auto colors = SyntheticColors(1000, 1);
+  auto png = EncodeColorImage(colors, Curve::kHilbert, ImageFormat::kPng, 0);
+  ASSERT_TRUE(png.ok()) << png.status().ToString();
+  EXPECT_EQ(*DecodeColorImage(*png, colors.size()), colors);
+  EXPECT_EQ(DecodeColorImage(*png, 5000).status().code(), StatusCode::kCorrupt);  // a 32x32 image holds 1024
+  auto garbage = *png;
+  garbage.resize(40);
+  EXPECT_FALSE(DecodeColorImage(garbage, colors.size()).ok());
+  garbage[0] = 7;
+  EXPECT_EQ(DecodeColorImage(garbage, colors.size()).status().code(), StatusCode::kCorrupt);
+}
+
 TEST(ColorCodec, ParsesNames) {
   EXPECT_EQ(*ParseColorCodec("vbr"), ColorCodec::kVariableRate);
   EXPECT_EQ(*ParseColorCodec("fixed3"), ColorCodec::kFixedRate);
+  EXPECT_EQ(*ParseColorCodec("webp"), ColorCodec::kWebp);
   EXPECT_FALSE(ParseColorCodec("jpeg2000").ok());
 }
 
@@ -185,7 +222,7 @@ TEST_P(LossyTargetTest, EveryLossyCodecMeetsItsTargetPsnr) {
   options.voxel_size = GetParam().voxel;
   auto scan = EncodeScan(testing::DataDir() / GetParam().file, options);
   ASSERT_TRUE(scan.ok()) << scan.status().ToString();
-  for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+  for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate, ColorCodec::kJpeg, ColorCodec::kWebp}) {
     for (double target : {30.0, 38.0}) {
       auto encoded = EncodeColors(scan->grid.colors, {codec, target});
       ASSERT_TRUE(encoded.ok());

@@ -59,7 +59,52 @@ StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, ColorCodec 
   return out;
 }
 
+EncodedColors Finish(std::span<const Rgb8> colors, ColorCodec codec, std::vector<uint8_t> payload,
+                     std::span<const Rgb8> decoded) {
+  EncodedColors out;
+  out.codec = codec;
+  out.psnr = MeasureColorPsnr(colors, decoded);
+  out.bytes.push_back(static_cast<uint8_t>(codec));
+  out.bytes.insert(out.bytes.end(), payload.begin(), payload.end());
+  return out;
+}
+
+StatusOr<EncodedColors> EncodeImageAt(std::span<const Rgb8> colors, ColorCodec codec, Curve curve, int quality) {
+  const ImageFormat format = codec == ColorCodec::kPng ? ImageFormat::kPng
+                             : codec == ColorCodec::kJpeg ? ImageFormat::kJpeg
+                                                          : ImageFormat::kWebp;
+  ASSIGN_OR_RETURN(std::vector<uint8_t> payload, EncodeColorImage(colors, curve, format, quality));
+  ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColorImage(payload, colors.size()));
+  return Finish(colors, codec, std::move(payload), decoded);
+}
+
+// The lowest quality whose decoded colors meet the target (the image codecs' size grows with it).
+StatusOr<EncodedColors> SearchImageQuality(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
+  int lo = 1, hi = 100;
+  ASSIGN_OR_RETURN(EncodedColors best, EncodeImageAt(colors, options.codec, options.curve, hi));
+  if (best.psnr.y < *options.target_psnr_y) {
+    return InvalidArgument(std::string(ColorCodecName(options.codec)) + " cannot reach " +
+                           std::to_string(*options.target_psnr_y) + " dB PSNR-Y on these colors");
+  }
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    ASSIGN_OR_RETURN(EncodedColors trial, EncodeImageAt(colors, options.codec, options.curve, mid));
+    if (trial.psnr.y >= *options.target_psnr_y) {
+      hi = mid;
+      if (trial.bytes.size() <= best.bytes.size()) best = std::move(trial);
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return best;
+}
+
 }  // namespace
+
+bool IsLossy(ColorCodec codec) {
+  return codec == ColorCodec::kFixedRate || codec == ColorCodec::kVariableRate || codec == ColorCodec::kJpeg ||
+         codec == ColorCodec::kWebp;
+}
 
 const char* ColorCodecName(ColorCodec codec) {
   switch (codec) {
@@ -67,21 +112,32 @@ const char* ColorCodecName(ColorCodec codec) {
     case ColorCodec::kLossless: return "lossless";
     case ColorCodec::kFixedRate: return "fixed3";
     case ColorCodec::kVariableRate: return "vbr";
+    case ColorCodec::kPng: return "png";
+    case ColorCodec::kJpeg: return "jpeg";
+    case ColorCodec::kWebp: return "webp";
   }
   return "?";
 }
 
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name) {
-  for (ColorCodec c : {ColorCodec::kRaw, ColorCodec::kLossless, ColorCodec::kFixedRate, ColorCodec::kVariableRate}) {
+  for (ColorCodec c : {ColorCodec::kRaw, ColorCodec::kLossless, ColorCodec::kFixedRate, ColorCodec::kVariableRate,
+                       ColorCodec::kPng, ColorCodec::kJpeg, ColorCodec::kWebp}) {
     if (name == ColorCodecName(c)) return c;
   }
-  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr)");
+  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp)");
 }
 
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
   if (colors.empty()) return InvalidArgument("no colors to encode");
+  if (!IsLossy(options.codec) && options.target_psnr_y) {
+    return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg or webp)");
+  }
+  if (options.codec == ColorCodec::kPng) return EncodeImageAt(colors, options.codec, options.curve, 0);
+  if (options.codec == ColorCodec::kJpeg || options.codec == ColorCodec::kWebp) {
+    if (!options.target_psnr_y) return EncodeImageAt(colors, options.codec, options.curve, options.image_quality);
+    return SearchImageQuality(colors, options);
+  }
   if (options.codec == ColorCodec::kRaw || options.codec == ColorCodec::kLossless) {
-    if (options.target_psnr_y) return InvalidArgument("a PSNR target needs a lossy codec (fixed3 or vbr)");
     EncodedColors out;
     out.codec = options.codec;
     out.psnr = MeasureColorPsnr(colors, colors);
@@ -139,6 +195,10 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
       ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload, count));
       return decoder.DecodeAll();
     }
+    case ColorCodec::kPng:
+    case ColorCodec::kJpeg:
+    case ColorCodec::kWebp:
+      return DecodeColorImage(payload, count);
   }
   return Corrupt("colors section names unknown codec " + std::to_string(section[0]));
 }

@@ -1,10 +1,12 @@
 // Stage 5: the colors section, whichever codec codes it, and the quality knob.
 //
-// Codecs: "raw" (24 bits), "lossless" (per-channel differences along the color order, zstd), and the
-// block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB). A target PSNR-Y makes the encoder search
-// the block codecs' MSE threshold: bisection on its logarithm, keeping the largest threshold whose
-// decoded colors still meet the target, so the target is met by construction (measured, not
-// predicted). The stored section starts with the codec's id byte (proto/PDAG_FORMAT.md §3).
+// Codecs: "raw" (24 bits), "lossless" (per-channel differences along the color order, zstd), the
+// block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB), and the 2D mapping of Paper IIA through
+// image codecs: "png" (lossless), "jpeg" and "webp". A target PSNR-Y makes the encoder search the
+// block codecs' MSE threshold (bisection on its logarithm) or the image codecs' quality (bisection
+// on 1..100), keeping the cheapest setting whose decoded colors still meet the target: the target
+// is met by measurement, not prediction. The stored section starts with the codec's id byte
+// (proto/PDAG_FORMAT.md §3).
 #pragma once
 
 #include <optional>
@@ -13,19 +15,24 @@
 #include <vector>
 
 #include "pointdag/color/color_metrics.h"
+#include "pointdag/color/image_mapping.h"
 #include "pointdag/status.h"
 
 namespace pointdag {
 
-enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3 };
+enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3, kPng = 4, kJpeg = 5, kWebp = 6 };
 const char* ColorCodecName(ColorCodec codec);
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name);
 
 struct ColorEncodeOptions {
   ColorCodec codec = ColorCodec::kVariableRate;
-  std::optional<double> target_psnr_y;  // dB; block codecs only
+  std::optional<double> target_psnr_y;  // dB; lossy codecs only
   double max_mse = 16.0;                // per-channel MSE bound of a block when no target is given
+  Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
+  int image_quality = 90;               // jpeg/webp when no target is given
 };
+
+bool IsLossy(ColorCodec codec);
 
 struct EncodedColors {
   std::vector<uint8_t> bytes;  // the colors section

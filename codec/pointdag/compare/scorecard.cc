@@ -20,12 +20,24 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
     for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
       for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target});
     }
+    // The 2D mapping (Paper IIA) along both curves.
+    for (Curve curve : {Curve::kHilbert, Curve::kMorton}) {
+      for (ColorCodec codec : {ColorCodec::kJpeg, ColorCodec::kWebp}) {
+        for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target, 16.0, curve});
+      }
+      trials.push_back({ColorCodec::kPng, std::nullopt, 16.0, curve});
+    }
     trials.push_back({ColorCodec::kLossless, std::nullopt});
     trials.push_back({ColorCodec::kRaw, std::nullopt});
     for (const ColorEncodeOptions& trial : trials) {
-      ASSIGN_OR_RETURN(const EncodedColors colors, EncodeColors(scan.grid.colors, trial));
+      auto encoded = EncodeColors(scan.grid.colors, trial);
+      if (!encoded.ok() && encoded.status().code() == StatusCode::kInvalidArgument) continue;  // target out of its reach
+      if (!encoded.ok()) return encoded.status();
+      const EncodedColors& colors = *encoded;
       const double color_bits = bpv(colors.bytes.size());
+      const bool image = trial.codec == ColorCodec::kPng || trial.codec == ColorCodec::kJpeg || trial.codec == ColorCodec::kWebp;
       codecs.push_back({{"name", ColorCodecName(trial.codec)},
+                        {"curve", image ? nlohmann::json(CurveName(trial.curve)) : nlohmann::json()},
                         {"target_psnr", trial.target_psnr_y ? nlohmann::json(*trial.target_psnr_y) : nlohmann::json()},
                         {"psnr_y", finite_or_null(colors.psnr.y)},
                         {"psnr_rgb", finite_or_null(colors.psnr.rgb)},

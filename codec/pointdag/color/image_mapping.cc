@@ -1,0 +1,157 @@
+#include "pointdag/color/image_mapping.h"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <array>
+#include <bit>
+#include <cstdio>
+#include <filesystem>
+
+#include "pointdag/container/pdag_file.h"
+#include "pointdag/entropy/varint.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+const char* Extension(ImageFormat format) {
+  switch (format) {
+    case ImageFormat::kPng: return ".png";
+    case ImageFormat::kJpeg: return ".jpg";
+    case ImageFormat::kWebp: return ".webp";
+  }
+  return ".bin";
+}
+
+// OpenImageIO plugins pick the format by file name, so images go through a private temporary file.
+class TempImage {
+ public:
+  explicit TempImage(ImageFormat format) {
+    std::string pattern = (std::filesystem::temp_directory_path() / "pointdag-image-XXXXXX").string();
+    const int fd = mkstemp(pattern.data());
+    if (fd >= 0) {
+      close(fd);
+      std::filesystem::remove(pattern);
+      path_ = pattern + Extension(format);
+    }
+  }
+  ~TempImage() {
+    std::error_code ec;
+    if (!path_.empty()) std::filesystem::remove(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+uint32_t SideFor(uint64_t count) {
+  uint32_t side = 1;
+  while (uint64_t{side} * side < count) side <<= 1;
+  return side;
+}
+
+}  // namespace
+
+const char* CurveName(Curve curve) { return curve == Curve::kMorton ? "morton" : "hilbert"; }
+
+const char* ImageFormatName(ImageFormat format) {
+  switch (format) {
+    case ImageFormat::kPng: return "png";
+    case ImageFormat::kJpeg: return "jpeg";
+    case ImageFormat::kWebp: return "webp";
+  }
+  return "?";
+}
+
+std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side) {
+  if (curve == Curve::kMorton) {
+    uint32_t x = 0, y = 0;
+    for (int b = 0; b < 32; ++b) {
+      x |= static_cast<uint32_t>((i >> (2 * b + 1)) & 1u) << b;
+      y |= static_cast<uint32_t>((i >> (2 * b)) & 1u) << b;
+    }
+    return {x, y};
+  }
+  // Hilbert: the classic iterative d -> (x, y) walk, quadrant by quadrant.
+  uint32_t x = 0, y = 0;
+  uint64_t t = i;
+  for (uint32_t s = 1; s < side; s <<= 1) {
+    const uint32_t rx = static_cast<uint32_t>((t >> 1) & 1u);
+    const uint32_t ry = static_cast<uint32_t>((t ^ rx) & 1u);
+    if (ry == 0) {
+      if (rx == 1) {
+        x = s - 1 - x;
+        y = s - 1 - y;
+      }
+      std::swap(x, y);
+    }
+    x += s * rx;
+    y += s * ry;
+    t >>= 2;
+  }
+  return {x, y};
+}
+
+StatusOr<std::vector<uint8_t>> EncodeColorImage(std::span<const Rgb8> colors, Curve curve, ImageFormat format,
+                                                int quality) {
+  if (colors.empty()) return InvalidArgument("no colors to map");
+  const uint32_t side = SideFor(colors.size());
+  if (side > 16384 && format != ImageFormat::kPng) return ResourceLimit("texture too large for JPEG/WebP");
+  std::vector<uint8_t> pixels(size_t{side} * side * 3);
+  for (uint64_t i = 0; i < uint64_t{side} * side; ++i) {
+    const Rgb8 c = colors[std::min<uint64_t>(i, colors.size() - 1)];
+    const auto [x, y] = CurvePosition(curve, i, side);
+    uint8_t* p = &pixels[(size_t{y} * side + x) * 3];
+    p[0] = c.r, p[1] = c.g, p[2] = c.b;
+  }
+  TempImage file(format);
+  if (file.path().empty()) return IoError("cannot create a temporary image file");
+  auto out = OIIO::ImageOutput::create(file.path());
+  if (!out) return Unsupported(std::string("OpenImageIO cannot write ") + ImageFormatName(format));
+  OIIO::ImageSpec spec(static_cast<int>(side), static_cast<int>(side), 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("Compression", std::string(ImageFormatName(format)) + ":" + std::to_string(quality));
+  spec.attribute("CompressionQuality", quality);
+  if (!out->open(file.path(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close()) {
+    return IoError("OpenImageIO failed to write the color image: " + out->geterror());
+  }
+  ASSIGN_OR_RETURN(std::vector<uint8_t> image, ReadFileBytes(file.path()));
+  std::vector<uint8_t> payload = {static_cast<uint8_t>(curve), static_cast<uint8_t>(format)};
+  PutVarint(payload, side);
+  payload.insert(payload.end(), image.begin(), image.end());
+  return payload;
+}
+
+StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t> payload, uint64_t count) {
+  if (payload.size() < 3) return Truncated("color image is shorter than its header");
+  if (payload[0] > 1 || payload[1] > 2) return Corrupt("color image names an unknown curve or format");
+  const auto curve = static_cast<Curve>(payload[0]);
+  const auto format = static_cast<ImageFormat>(payload[1]);
+  size_t pos = 2;
+  uint64_t side = 0;
+  if (!GetVarint(payload, pos, side) || side == 0 || side > 65536 || !std::has_single_bit(side) ||
+      side * side < count || (side > 1 && (side / 2) * (side / 2) >= count)) {
+    return Corrupt("color image side does not fit the color count");
+  }
+  TempImage file(format);
+  if (file.path().empty()) return IoError("cannot create a temporary image file");
+  RETURN_IF_ERROR(WriteFileAtomically(file.path(), payload.subspan(pos)));
+  auto in = OIIO::ImageInput::open(file.path());
+  if (!in) return Corrupt("color image cannot be opened: " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  if (uint64_t(spec.width) != side || uint64_t(spec.height) != side || spec.nchannels < 3) {
+    return Corrupt("color image has the wrong size or channels");
+  }
+  std::vector<uint8_t> pixels(side * side * 3);
+  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data())) return Corrupt("color image fails to decode");
+  std::vector<Rgb8> colors(count);
+  for (uint64_t i = 0; i < count; ++i) {
+    const auto [x, y] = CurvePosition(curve, i, static_cast<uint32_t>(side));
+    const uint8_t* p = &pixels[(size_t{y} * side + x) * 3];
+    colors[i] = {p[0], p[1], p[2]};
+  }
+  return colors;
+}
+
+}  // namespace pointdag
