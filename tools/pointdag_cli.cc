@@ -175,13 +175,20 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
               out["geometry"]["stored_context_bits_per_voxel"].get<double>());
   std::printf("  Draco, lossless, same voxels: %.3f bits/point (%s, speed %d)\n", out["draco_bits_per_point"].get<double>(),
               out["draco"]["method"].get<std::string>().c_str(), out["draco"]["speed"].get<int>());
+  const auto& orig = out["original"];
+  std::printf("  voxels vs original points: D1 MSE %.3g, D1 PSNR %s dB, voxel colors PSNR-Y %s dB\n", orig["d1_mse"].get<double>(),
+              orig["d1_psnr"].is_null() ? "inf" : std::to_string(orig["d1_psnr"].get<double>()).substr(0, 5).c_str(),
+              orig["psnr_y_voxel_colors"].is_null() ? "-" : std::to_string(orig["psnr_y_voxel_colors"].get<double>()).substr(0, 5).c_str());
   if (!codecs.empty()) {
-    std::printf("  %-13s %8s %8s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "color b/vox", "total b/vox", "Draco / ours");
+    std::printf("  %-13s %8s %8s %9s %12s %12s %14s\n", "colors", "target", "PSNR-Y", "vs orig", "color b/vox", "total b/vox",
+                "Draco / ours");
     for (const auto& c : codecs) {
       const std::string target = c["target_psnr"].is_null() ? "-" : std::to_string(c["target_psnr"].get<int>()) + " dB";
       const std::string name = c["name"].get<std::string>() + (c["curve"].is_null() ? "" : "/" + c["curve"].get<std::string>());
       const std::string psnr = c["psnr_y"].is_null() ? "exact" : std::to_string(c["psnr_y"].get<double>()).substr(0, 5);
-      std::printf("  %-13s %8s %8s %12.3f %12.3f %13.2fx\n", name.c_str(), target.c_str(), psnr.c_str(),
+      const std::string vs_original =
+          c["psnr_y_vs_original"].is_null() ? "-" : std::to_string(c["psnr_y_vs_original"].get<double>()).substr(0, 5);
+      std::printf("  %-13s %8s %8s %9s %12.3f %12.3f %13.2fx\n", name.c_str(), target.c_str(), psnr.c_str(), vs_original.c_str(),
                   c["color_bits_per_voxel"].get<double>(), c["total_bits_per_voxel"].get<double>(),
                   c["draco_over_ours"].get<double>());
     }

@@ -84,6 +84,7 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
 
 StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options) {
   EncodedScan out;
+  out.source = input;
   auto start = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(std::unique_ptr<ScanReader> reader, OpenScan(input));
   VoxelizeOptions vopt;

@@ -40,6 +40,7 @@ struct StageSeconds {
 };
 
 struct EncodedScan {
+  std::filesystem::path source;
   ScanInfo scan;
   VoxelGrid grid;
   Svdag dag;

@@ -74,6 +74,8 @@ TEST(Cli, CompareReportsUsAndDracoOnTheSameVoxels) {
   EXPECT_GT(json["voxels"].get<int>(), 0);
   EXPECT_GT(json["geometry_bits_per_voxel"].get<double>(), 0.0);
   EXPECT_GT(json["draco_bits_per_point"].get<double>(), 0.0);
+  EXPECT_GT(json["original"]["d1_mse"].get<double>(), 0.0);
+  EXPECT_GT(json["original"]["d1_psnr"].get<double>(), 0.0);
   std::set<std::pair<std::string, int>> seen;
   for (const auto& codec : json["codecs"]) {
     const std::string name = codec["name"];
@@ -89,10 +91,11 @@ TEST(Cli, CompareReportsUsAndDracoOnTheSameVoxels) {
     }
     EXPECT_GT(codec["color_bits_per_voxel"].get<double>(), 0.0);
   }
-  for (const char* name : {"vbr", "fixed3"}) {
+  for (const char* name : {"vbr", "fixed3", "jpeg", "webp"}) {
     for (int target : {30, 34, 38, 42}) EXPECT_EQ(seen.count({name, target}), 1u) << name << " " << target;
   }
   EXPECT_EQ(seen.count({"lossless", 0}), 1u);
+  EXPECT_EQ(seen.count({"png", 0}), 1u);
 }
 
 TEST(Cli, QualityFlagStoresLossyColorsThatMeetTheTarget) {

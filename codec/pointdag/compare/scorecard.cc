@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "pointdag/compare/draco_compare.h"
+#include "pointdag/compare/point_metrics.h"
 
 namespace pointdag {
 
@@ -13,6 +14,10 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
   const auto bpv = [&](size_t bytes) { return 8.0 * static_cast<double>(bytes) / voxels; };
   const double geometry = bpv(std::min(scan.file.geometry.size(), zstd_stream.size()));
   const auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+
+  // The whole pipeline against the original points: voxelization's geometric error, and below, each
+  // codec's colors as seen from the original points.
+  ASSIGN_OR_RETURN(const OriginalCorrespondence original, OriginalCorrespondence::Build(scan.source, scan.grid));
 
   nlohmann::json codecs = nlohmann::json::array();
   if (scan.grid.has_color()) {
@@ -34,6 +39,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
       if (!encoded.ok() && encoded.status().code() == StatusCode::kInvalidArgument) continue;  // target out of its reach
       if (!encoded.ok()) return encoded.status();
       const EncodedColors& colors = *encoded;
+      ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(colors.bytes, scan.grid.colors.size()));
       const double color_bits = bpv(colors.bytes.size());
       const bool image = trial.codec == ColorCodec::kPng || trial.codec == ColorCodec::kJpeg || trial.codec == ColorCodec::kWebp;
       codecs.push_back({{"name", ColorCodecName(trial.codec)},
@@ -42,6 +48,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
                         {"psnr_y", finite_or_null(colors.psnr.y)},
                         {"psnr_rgb", finite_or_null(colors.psnr.rgb)},
                         {"lossless", !std::isfinite(colors.psnr.y)},
+                        {"psnr_y_vs_original", finite_or_null(original.ColorPsnrY(decoded))},
                         {"blocks", colors.blocks},
                         {"color_bits_per_voxel", color_bits},
                         {"total_bits_per_voxel", geometry + color_bits},
@@ -58,6 +65,9 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
                     {"stored_context_bits_per_voxel", bpv(scan.file.geometry.size())},
                     {"stored_zstd_bits_per_voxel", bpv(zstd_stream.size())},
                     {"unique_nodes", scan.dag.UniqueNodeCount()}}},
+      {"original", {{"d1_mse", original.d1_mse()},
+                    {"d1_psnr", finite_or_null(original.d1_psnr())},
+                    {"psnr_y_voxel_colors", finite_or_null(original.ColorPsnrY(scan.grid.colors))}}},
       {"draco_bits_per_point", draco.bits_per_point},
       {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}}},
       {"codecs", codecs},
