@@ -74,7 +74,7 @@ StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
     options.codec = ColorCodec::kVariableRate;
   }
   const bool lossy = IsLossy(options.codec);
-  if (choice.quality && !lossy) return InvalidArgument("--quality needs a lossy color codec (vbr, fixed3, jpeg, webp)");
+  if (choice.quality && !lossy) return InvalidArgument("--quality needs a lossy color codec (vbr, fixed3, jpeg, webp, astc)");
   if (choice.curve == "morton") options.curve = Curve::kMorton;
   options.target_psnr_y = lossy ? std::optional<double>(choice.quality.value_or(kDefaultQualityDb)) : std::nullopt;
   return options;
@@ -216,9 +216,9 @@ int Main(int argc, char** argv) {
   auto* lossless = encode->add_flag("--lossless", color_choice.lossless, "keep colors exact (the default)");
   quality->excludes(lossless);
   encode->add_option("--color-codec", color_choice.codec,
-                     "raw, lossless, fixed3, vbr, png, jpeg or webp (the lossy ones default to 38 dB)")
-      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr", "png", "jpeg", "webp"}));
-  encode->add_option("--curve", color_choice.curve, "2D mapping of png/jpeg/webp colors")
+                     "raw, lossless, fixed3, vbr, png, jpeg, webp or astc (the lossy ones default to 38 dB)")
+      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr", "png", "jpeg", "webp", "astc"}));
+  encode->add_option("--curve", color_choice.curve, "2D mapping of png/jpeg/webp/astc colors")
       ->check(CLI::IsMember({"hilbert", "morton"}));
 
   auto* decode = app.add_subcommand("decode", "write a .pdag's voxels (centres + colors) as PLY");

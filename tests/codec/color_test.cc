@@ -3,6 +3,7 @@
 #include <cmath>
 #include <set>
 
+#include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/image_mapping.h"
@@ -191,10 +192,42 @@ TEST(ImageMapping, RejectsImagesThatDoNotFit) {
   EXPECT_EQ(DecodeColorImage(garbage, colors.size()).status().code(), StatusCode::kCorrupt);
 }
 
+TEST(AstcMapping, MeetsTargetStoresOnlyUsedBlocksAndRejectsLies) {
+  const auto colors = SyntheticColors(1000, 3);  // a 32x32 texture: 1000 texels used, 24 padding
+  for (Curve curve : {Curve::kMorton, Curve::kHilbert}) {
+    ColorEncodeOptions options{ColorCodec::kAstc, 30.0};
+    options.curve = curve;
+    auto encoded = EncodeColors(colors, options);
+    ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+    auto decoded = DecodeColors(encoded->bytes, colors.size());
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_GE(MeasureColorPsnr(colors, *decoded).y, 30.0);
+  }
+  // 4x4 footprint over 32x32: 64 blocks; a Morton prefix of 1000 leaves the last 24 texels, one
+  // and a half 4x4 blocks, unused: exactly one block is not stored.
+  auto payload = EncodeColorAstc(colors, Curve::kMorton, 4);
+  ASSERT_TRUE(payload.ok());
+  EXPECT_EQ(payload->size(), 3u + 63u * 16u);
+  auto exact_fit = EncodeColorAstc(std::span(colors).first(1024 - 16), Curve::kMorton, 4);
+  ASSERT_TRUE(exact_fit.ok());
+  EXPECT_EQ(exact_fit->size(), 3u + 63u * 16u);
+  EXPECT_TRUE(DecodeColorAstc(*payload, colors.size()).ok());
+  EXPECT_EQ(DecodeColorAstc(*payload, 2000).status().code(), StatusCode::kCorrupt);  // side lies
+  auto bad = *payload;
+  bad[1] = 7;  // no such footprint
+  EXPECT_EQ(DecodeColorAstc(bad, colors.size()).status().code(), StatusCode::kCorrupt);
+  bad = *payload;
+  bad.resize(bad.size() - 16);  // one block short
+  EXPECT_EQ(DecodeColorAstc(bad, colors.size()).status().code(), StatusCode::kCorrupt);
+  EXPECT_EQ(DecodeColorAstc(std::span(*payload).first(2), colors.size()).status().code(), StatusCode::kTruncated);
+  EXPECT_FALSE(EncodeColorAstc(colors, Curve::kMorton, 7).ok());
+}
+
 TEST(ColorCodec, ParsesNames) {
   EXPECT_EQ(*ParseColorCodec("vbr"), ColorCodec::kVariableRate);
   EXPECT_EQ(*ParseColorCodec("fixed3"), ColorCodec::kFixedRate);
   EXPECT_EQ(*ParseColorCodec("webp"), ColorCodec::kWebp);
+  EXPECT_EQ(*ParseColorCodec("astc"), ColorCodec::kAstc);
   EXPECT_FALSE(ParseColorCodec("jpeg2000").ok());
 }
 
@@ -222,10 +255,10 @@ TEST_P(LossyTargetTest, EveryLossyCodecMeetsItsTargetPsnr) {
   options.voxel_size = GetParam().voxel;
   auto scan = EncodeScan(testing::DataDir() / GetParam().file, options);
   ASSERT_TRUE(scan.ok()) << scan.status().ToString();
-  for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate, ColorCodec::kJpeg, ColorCodec::kWebp}) {
+  for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate, ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc}) {
     for (double target : {30.0, 38.0}) {
       auto encoded = EncodeColors(scan->grid.colors, {codec, target});
-      ASSERT_TRUE(encoded.ok());
+      ASSERT_TRUE(encoded.ok()) << ColorCodecName(codec) << ": " << encoded.status().ToString();
       // Measured on what a reader decodes, not on the encoder's word.
       auto decoded = DecodeColors(encoded->bytes, scan->grid.colors.size());
       ASSERT_TRUE(decoded.ok());

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
 
 namespace pointdag {
@@ -99,11 +100,26 @@ StatusOr<EncodedColors> SearchImageQuality(std::span<const Rgb8> colors, const C
   return best;
 }
 
+StatusOr<EncodedColors> EncodeAstcAt(std::span<const Rgb8> colors, Curve curve, int footprint) {
+  ASSIGN_OR_RETURN(std::vector<uint8_t> payload, EncodeColorAstc(colors, curve, footprint));
+  ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColorAstc(payload, colors.size()));
+  return Finish(colors, ColorCodec::kAstc, std::move(payload), decoded);
+}
+
+// ASTC is fixed-rate per footprint: the first footprint, cheapest first, that meets the target.
+StatusOr<EncodedColors> SearchAstcFootprint(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
+  for (int footprint : kAstcFootprints) {
+    ASSIGN_OR_RETURN(EncodedColors trial, EncodeAstcAt(colors, options.curve, footprint));
+    if (trial.psnr.y >= *options.target_psnr_y) return trial;
+  }
+  return InvalidArgument("astc cannot reach " + std::to_string(*options.target_psnr_y) + " dB PSNR-Y on these colors");
+}
+
 }  // namespace
 
 bool IsLossy(ColorCodec codec) {
   return codec == ColorCodec::kFixedRate || codec == ColorCodec::kVariableRate || codec == ColorCodec::kJpeg ||
-         codec == ColorCodec::kWebp;
+         codec == ColorCodec::kWebp || codec == ColorCodec::kAstc;
 }
 
 const char* ColorCodecName(ColorCodec codec) {
@@ -115,24 +131,29 @@ const char* ColorCodecName(ColorCodec codec) {
     case ColorCodec::kPng: return "png";
     case ColorCodec::kJpeg: return "jpeg";
     case ColorCodec::kWebp: return "webp";
+    case ColorCodec::kAstc: return "astc";
   }
   return "?";
 }
 
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name) {
   for (ColorCodec c : {ColorCodec::kRaw, ColorCodec::kLossless, ColorCodec::kFixedRate, ColorCodec::kVariableRate,
-                       ColorCodec::kPng, ColorCodec::kJpeg, ColorCodec::kWebp}) {
+                       ColorCodec::kPng, ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc}) {
     if (name == ColorCodecName(c)) return c;
   }
-  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp)");
+  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp, astc)");
 }
 
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
   if (colors.empty()) return InvalidArgument("no colors to encode");
   if (!IsLossy(options.codec) && options.target_psnr_y) {
-    return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg or webp)");
+    return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg, webp or astc)");
   }
   if (options.codec == ColorCodec::kPng) return EncodeImageAt(colors, options.codec, options.curve, 0);
+  if (options.codec == ColorCodec::kAstc) {
+    if (!options.target_psnr_y) return EncodeAstcAt(colors, options.curve, options.astc_footprint);
+    return SearchAstcFootprint(colors, options);
+  }
   if (options.codec == ColorCodec::kJpeg || options.codec == ColorCodec::kWebp) {
     if (!options.target_psnr_y) return EncodeImageAt(colors, options.codec, options.curve, options.image_quality);
     return SearchImageQuality(colors, options);
@@ -199,6 +220,8 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
     case ColorCodec::kJpeg:
     case ColorCodec::kWebp:
       return DecodeColorImage(payload, count);
+    case ColorCodec::kAstc:
+      return DecodeColorAstc(payload, count);
   }
   return Corrupt("colors section names unknown codec " + std::to_string(section[0]));
 }

@@ -2,9 +2,10 @@
 //
 // Codecs: "raw" (24 bits), "lossless" (per-channel differences along the color order, zstd), the
 // block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB), and the 2D mapping of Paper IIA through
-// image codecs: "png" (lossless), "jpeg" and "webp". A target PSNR-Y makes the encoder search the
-// block codecs' MSE threshold (bisection on its logarithm) or the image codecs' quality (bisection
-// on 1..100), keeping the cheapest setting whose decoded colors still meet the target: the target
+// image codecs: "png" (lossless), "jpeg", "webp", and the GPU texture format "astc". A target
+// PSNR-Y makes the encoder search the block codecs' MSE threshold (bisection on its logarithm), the
+// image codecs' quality (bisection on 1..100) or ASTC's footprint (cheapest first), keeping the
+// cheapest setting whose decoded colors still meet the target: the target
 // is met by measurement, not prediction. The stored section starts with the codec's id byte
 // (proto/PDAG_FORMAT.md §3).
 #pragma once
@@ -20,7 +21,7 @@
 
 namespace pointdag {
 
-enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3, kPng = 4, kJpeg = 5, kWebp = 6 };
+enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3, kPng = 4, kJpeg = 5, kWebp = 6, kAstc = 7 };
 const char* ColorCodecName(ColorCodec codec);
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name);
 
@@ -30,6 +31,7 @@ struct ColorEncodeOptions {
   double max_mse = 16.0;                // per-channel MSE bound of a block when no target is given
   Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
   int image_quality = 90;               // jpeg/webp when no target is given
+  int astc_footprint = 6;               // astc when no target is given
 };
 
 bool IsLossy(ColorCodec codec);

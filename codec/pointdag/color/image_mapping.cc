@@ -46,13 +46,34 @@ class TempImage {
   std::string path_;
 };
 
-uint32_t SideFor(uint64_t count) {
+}  // namespace
+
+uint32_t TextureSide(uint64_t count) {
   uint32_t side = 1;
   while (uint64_t{side} * side < count) side <<= 1;
   return side;
 }
 
-}  // namespace
+std::vector<uint8_t> LayOutTexture(std::span<const Rgb8> colors, Curve curve, uint32_t side, int channels) {
+  std::vector<uint8_t> pixels(size_t{side} * side * static_cast<size_t>(channels), 255);
+  for (uint64_t i = 0; i < uint64_t{side} * side; ++i) {
+    const Rgb8 c = colors[std::min<uint64_t>(i, colors.size() - 1)];
+    const auto [x, y] = CurvePosition(curve, i, side);
+    uint8_t* p = &pixels[(size_t{y} * side + x) * static_cast<size_t>(channels)];
+    p[0] = c.r, p[1] = c.g, p[2] = c.b;
+  }
+  return pixels;
+}
+
+std::vector<Rgb8> GatherTexture(std::span<const uint8_t> pixels, Curve curve, uint32_t side, int channels, uint64_t count) {
+  std::vector<Rgb8> colors(count);
+  for (uint64_t i = 0; i < count; ++i) {
+    const auto [x, y] = CurvePosition(curve, i, side);
+    const uint8_t* p = &pixels[(size_t{y} * side + x) * static_cast<size_t>(channels)];
+    colors[i] = {p[0], p[1], p[2]};
+  }
+  return colors;
+}
 
 const char* CurveName(Curve curve) { return curve == Curve::kMorton ? "morton" : "hilbert"; }
 
@@ -97,15 +118,9 @@ std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side) {
 StatusOr<std::vector<uint8_t>> EncodeColorImage(std::span<const Rgb8> colors, Curve curve, ImageFormat format,
                                                 int quality) {
   if (colors.empty()) return InvalidArgument("no colors to map");
-  const uint32_t side = SideFor(colors.size());
+  const uint32_t side = TextureSide(colors.size());
   if (side > 16384 && format != ImageFormat::kPng) return ResourceLimit("texture too large for JPEG/WebP");
-  std::vector<uint8_t> pixels(size_t{side} * side * 3);
-  for (uint64_t i = 0; i < uint64_t{side} * side; ++i) {
-    const Rgb8 c = colors[std::min<uint64_t>(i, colors.size() - 1)];
-    const auto [x, y] = CurvePosition(curve, i, side);
-    uint8_t* p = &pixels[(size_t{y} * side + x) * 3];
-    p[0] = c.r, p[1] = c.g, p[2] = c.b;
-  }
+  const std::vector<uint8_t> pixels = LayOutTexture(colors, curve, side, 3);
   TempImage file(format);
   if (file.path().empty()) return IoError("cannot create a temporary image file");
   auto out = OIIO::ImageOutput::create(file.path());
@@ -130,8 +145,7 @@ StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t> payload, u
   const auto format = static_cast<ImageFormat>(payload[1]);
   size_t pos = 2;
   uint64_t side = 0;
-  if (!GetVarint(payload, pos, side) || side == 0 || side > 65536 || !std::has_single_bit(side) ||
-      side * side < count || (side > 1 && (side / 2) * (side / 2) >= count)) {
+  if (!GetVarint(payload, pos, side) || side != TextureSide(count)) {
     return Corrupt("color image side does not fit the color count");
   }
   TempImage file(format);
@@ -145,13 +159,7 @@ StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t> payload, u
   }
   std::vector<uint8_t> pixels(side * side * 3);
   if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data())) return Corrupt("color image fails to decode");
-  std::vector<Rgb8> colors(count);
-  for (uint64_t i = 0; i < count; ++i) {
-    const auto [x, y] = CurvePosition(curve, i, static_cast<uint32_t>(side));
-    const uint8_t* p = &pixels[(size_t{y} * side + x) * 3];
-    colors[i] = {p[0], p[1], p[2]};
-  }
-  return colors;
+  return GatherTexture(pixels, curve, static_cast<uint32_t>(side), 3, count);
 }
 
 }  // namespace pointdag

@@ -24,6 +24,14 @@ const char* ImageFormatName(ImageFormat format);
 // Texel (x, y) of position i along the curve on a side x side texture (side a power of two).
 std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side);
 
+// The smallest power-of-two side whose square holds `count` texels.
+uint32_t TextureSide(uint64_t count);
+// Colors along the curve into a side x side texture of `channels` 8-bit channels (alpha = 255),
+// row-major; texels past the last color repeat it.
+std::vector<uint8_t> LayOutTexture(std::span<const Rgb8> colors, Curve curve, uint32_t side, int channels);
+// The first `count` colors back out of such a texture.
+std::vector<Rgb8> GatherTexture(std::span<const uint8_t> pixels, Curve curve, uint32_t side, int channels, uint64_t count);
+
 // Payload: u8 curve, u8 format, varint side, then the image file's bytes. `quality` 1..100 is
 // ignored by PNG.
 StatusOr<std::vector<uint8_t>> EncodeColorImage(std::span<const Rgb8> colors, Curve curve, ImageFormat format,

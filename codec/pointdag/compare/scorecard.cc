@@ -27,7 +27,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
     }
     // The 2D mapping (Paper IIA) along both curves.
     for (Curve curve : {Curve::kHilbert, Curve::kMorton}) {
-      for (ColorCodec codec : {ColorCodec::kJpeg, ColorCodec::kWebp}) {
+      for (ColorCodec codec : {ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc}) {
         for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target, 16.0, curve});
       }
       trials.push_back({ColorCodec::kPng, std::nullopt, 16.0, curve});
@@ -41,7 +41,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
       const EncodedColors& colors = *encoded;
       ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(colors.bytes, scan.grid.colors.size()));
       const double color_bits = bpv(colors.bytes.size());
-      const bool image = trial.codec == ColorCodec::kPng || trial.codec == ColorCodec::kJpeg || trial.codec == ColorCodec::kWebp;
+      const bool image = trial.codec >= ColorCodec::kPng;
       codecs.push_back({{"name", ColorCodecName(trial.codec)},
                         {"curve", image ? nlohmann::json(CurveName(trial.curve)) : nlohmann::json()},
                         {"target_psnr", trial.target_psnr_y ? nlohmann::json(*trial.target_psnr_y) : nlohmann::json()},
