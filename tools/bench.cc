@@ -175,8 +175,8 @@ int RunColorBench(const BenchOptions& options) {
   if (!options.json) {
     std::printf("machine: %s; color encoders use both cores (oneTBB over macro blocks), decoding one core\n",
                 MachineName().c_str());
-    std::printf("| scan | voxel | voxels | codec | target dB | PSNR-Y dB | color b/vox | geometry b/vox | total b/vox | Draco b/pt | Draco / ours |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| scan | voxel | voxels | codec | target dB | PSNR-Y dB | PSNR-Y vs original dB | color b/vox | geometry b/vox | total b/vox | Draco b/pt | Draco / ours |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   }
   std::vector<std::string> speed_rows;
   for (const auto& scan : ScansIn(options.data_dir)) {
@@ -195,11 +195,13 @@ int RunColorBench(const BenchOptions& options) {
                 << std::endl;
       continue;
     }
+    const auto decibels = [](const nlohmann::json& v) { return v.is_null() ? std::string("exact") : std::to_string(v.get<double>()).substr(0, 5); };
     for (const auto& c : (*card)["codecs"]) {
-      std::printf("| %s | %g | %zu | %s | %s | %s | %.3f | %.3f | %.3f | %.2f | %.2fx |\n", scan.filename().c_str(),
-                  encode.voxel_size.value(), encoded->grid.morton.size(), c["name"].get<std::string>().c_str(),
+      const std::string name = c["name"].get<std::string>() + (c["curve"].is_null() ? "" : "/" + c["curve"].get<std::string>());
+      std::printf("| %s | %g | %zu | %s | %s | %s | %s | %.3f | %.3f | %.3f | %.2f | %.2fx |\n", scan.filename().c_str(),
+                  encode.voxel_size.value(), encoded->grid.morton.size(), name.c_str(),
                   c["target_psnr"].is_null() ? "-" : std::to_string(c["target_psnr"].get<int>()).c_str(),
-                  c["psnr_y"].is_null() ? "exact" : (std::to_string(c["psnr_y"].get<double>()).substr(0, 5)).c_str(),
+                  decibels(c["psnr_y"]).c_str(), decibels(c["psnr_y_vs_original"]).c_str(),
                   c["color_bits_per_voxel"].get<double>(), (*card)["geometry_bits_per_voxel"].get<double>(),
                   c["total_bits_per_voxel"].get<double>(), (*card)["draco_bits_per_point"].get<double>(),
                   c["draco_over_ours"].get<double>());

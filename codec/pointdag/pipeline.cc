@@ -41,6 +41,29 @@ Status Require(const nlohmann::json& meta, const char* key, T& out) {
   return Status::Ok();
 }
 
+// The stages after the DAG: its stored form, the colors, the metadata.
+Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
+  auto start = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));
+  out.seconds.encode = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  if (out.grid.has_color()) {
+    if (options.mipmap) {
+      const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors));
+    } else {
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
+    }
+    out.file.colors = out.colors.bytes;
+  }
+  out.seconds.colors = SecondsSince(start);
+  out.file.meta = DescribeScan(out.source.filename().string(), out.scan, out.grid, out.dag, options.geometry_coder,
+                               out.colors, options.colors);
+  if (options.georeference) out.file.meta["frame"] = DescribeFrame(out.frame);
+  return Status::Ok();
+}
+
 }  // namespace
 
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
@@ -86,7 +109,14 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
   EncodedScan out;
   out.source = input;
   auto start = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(std::unique_ptr<ScanReader> reader, OpenScan(input));
+  std::unique_ptr<ScanReader> reader;
+  if (options.georeference) {
+    ASSIGN_OR_RETURN(FramedReader framed, OpenScanInFrame(input, options.epsg));
+    reader = std::move(framed.reader);
+    out.frame = std::move(framed.frame);
+  } else {
+    ASSIGN_OR_RETURN(reader, OpenScan(input));
+  }
   VoxelizeOptions vopt;
   vopt.voxel_size = options.voxel_size;
   vopt.depth = options.depth;
@@ -115,23 +145,22 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
   out.seconds.build += SecondsSince(finish_start);
   out.seconds.read_voxelize = SecondsSince(start) - out.seconds.build;
 
-  start = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));
-  out.seconds.encode = SecondsSince(start);
+  RETURN_IF_ERROR(EncodeAfterDag(options, out));
+  return out;
+}
 
-  start = std::chrono::steady_clock::now();
-  if (out.grid.has_color()) {
-    if (options.mipmap) {
-      const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors));
-    } else {
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
-    }
-    out.file.colors = out.colors.bytes;
-  }
-  out.seconds.colors = SecondsSince(start);
-  out.file.meta = DescribeScan(input.filename().string(), out.scan, out.grid, out.dag, options.geometry_coder,
-                               out.colors, options.colors);
+StatusOr<EncodedScan> EncodeGrid(VoxelGrid grid, const ScanInfo& scan, const std::string& source_name,
+                                 const EncodeOptions& options) {
+  EncodedScan out;
+  out.source = source_name;
+  out.scan = scan;
+  out.grid = std::move(grid);
+  const auto start = std::chrono::steady_clock::now();
+  DagBuildOptions dag_options;
+  dag_options.mode = options.mipmap ? CountMode::kMipmap : CountMode::kLeaves;
+  ASSIGN_OR_RETURN(out.dag, BuildDag(out.grid.morton, out.grid.depth, dag_options));
+  out.seconds.build = SecondsSince(start);
+  RETURN_IF_ERROR(EncodeAfterDag(options, out));
   return out;
 }
 

@@ -5,7 +5,7 @@
 //
 //   colors (color/): raw, lossless, or the block codecs of Papers IIA/IIB at a target PSNR
 //
-// Georeferencing and tiling join this pipeline in later stages.
+//   georeferencing (georef/) wraps the reader when asked; tiling (tile/) cuts a voxel grid into LOD tiles
 #pragma once
 
 #include <filesystem>
@@ -16,6 +16,7 @@
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/dag/dag_stream.h"
 #include "pointdag/dag/svdag.h"
+#include "pointdag/georef/georeference.h"
 #include "pointdag/read/scan_reader.h"
 #include "pointdag/voxelize/voxelizer.h"
 
@@ -30,6 +31,8 @@ struct EncodeOptions {
   uint64_t max_points_in_memory = uint64_t{1} << 25;  // above it, voxelize and build chunk by chunk
   std::filesystem::path spill_dir;                    // chunk files; empty: the system's temp folder
   ProgressFn progress;
+  bool georeference = false;   // read in ENU metres about the scan's centre when it has a CRS (georef/)
+  std::optional<int> epsg;     // CRS override for georeferencing
 };
 
 struct StageSeconds {
@@ -42,6 +45,7 @@ struct StageSeconds {
 struct EncodedScan {
   std::filesystem::path source;
   ScanInfo scan;
+  GeoFrame frame;  // georeferenced only with EncodeOptions::georeference
   VoxelGrid grid;
   Svdag dag;
   PdagFile file;
@@ -50,6 +54,10 @@ struct EncodedScan {
 };
 
 StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options);
+
+// The stages after voxelizing, for a grid already in memory (a tile): DAG, stored form, colors.
+StatusOr<EncodedScan> EncodeGrid(VoxelGrid grid, const ScanInfo& scan, const std::string& source_name,
+                                 const EncodeOptions& options);
 
 // Metadata JSON for a voxelized scan (source, CRS, grid, counts, codec parameters).
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,

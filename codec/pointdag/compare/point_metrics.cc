@@ -82,4 +82,29 @@ double OriginalCorrespondence::ColorPsnrY(std::span<const Rgb8> voxel_colors) co
   return PsnrFromMse(std::max(forward, backward));
 }
 
+double MedianPointSpacing(std::span<const std::array<double, 3>> points) {
+  if (points.size() < 2) return 0.0;
+  std::vector<double> data;
+  data.reserve(3 * points.size());
+  for (const auto& p : points) data.insert(data.end(), p.begin(), p.end());
+  flann::Matrix<double> data_m(data.data(), points.size(), 3);
+  flann::Index<flann::L2_Simple<double>> tree(data_m, flann::KDTreeSingleIndexParams(12));
+  tree.buildIndex();
+  std::vector<size_t> idx(2 * points.size());
+  std::vector<double> dist(2 * points.size());
+  flann::Matrix<size_t> idx_m(idx.data(), points.size(), 2);
+  flann::Matrix<double> dist_m(dist.data(), points.size(), 2);
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
+  tree.knnSearch(data_m, idx_m, dist_m, 2, params);
+  // The first neighbour is the point itself; duplicates (distance 0) say nothing about spacing.
+  std::vector<double> nearest;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (dist[2 * i + 1] > 0) nearest.push_back(dist[2 * i + 1]);
+  }
+  if (nearest.empty()) return 0.0;
+  auto mid = nearest.begin() + static_cast<long>(nearest.size() / 2);
+  std::nth_element(nearest.begin(), mid, nearest.end());
+  return std::sqrt(*mid);
+}
+
 }  // namespace pointdag

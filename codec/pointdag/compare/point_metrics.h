@@ -8,6 +8,7 @@
 // any decoded color array of the same voxels is then scored in linear time.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <span>
 #include <vector>
@@ -33,5 +34,8 @@ class OriginalCorrespondence {
   std::vector<uint32_t> nearest_original_; // per voxel
   double mse_original_to_voxels_ = 0, mse_voxels_to_original_ = 0, peak_ = 1;
 };
+
+// Median distance from each point to its nearest distinct neighbour (0 when there is none).
+double MedianPointSpacing(std::span<const std::array<double, 3>> points);
 
 }  // namespace pointdag

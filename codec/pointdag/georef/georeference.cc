@@ -1,0 +1,229 @@
+#include "pointdag/georef/georeference.h"
+
+#include <GeographicLib/Geocentric.hpp>
+#include <GeographicLib/LocalCartesian.hpp>
+#include <proj.h>
+
+#include <cmath>
+#include <vector>
+
+namespace pointdag {
+
+struct Georeferencer::Impl {
+  PJ_CONTEXT* ctx = nullptr;
+  PJ* to_geographic = nullptr;  // source -> EPSG:4979, axis order normalized to (lon, lat, h)
+  double z_scale = 1;           // applied before PROJ when the CRS has no vertical axis
+  GeographicLib::LocalCartesian enu;
+
+  ~Impl() {
+    if (to_geographic) proj_destroy(to_geographic);
+    if (ctx) proj_context_destroy(ctx);
+  }
+};
+
+namespace {
+
+// Owns one PJ object for the length of a scope.
+struct PjHolder {
+  PJ* pj = nullptr;
+  ~PjHolder() {
+    if (pj) proj_destroy(pj);
+  }
+};
+
+std::string ProjError(PJ_CONTEXT* ctx) { return proj_context_errno_string(ctx, proj_context_errno(ctx)); }
+
+// Metres per unit of the first axis of `crs`'s coordinate system, and its axis count.
+std::pair<double, int> AxisUnit(PJ_CONTEXT* ctx, PJ* crs) {
+  PjHolder cs{proj_crs_get_coordinate_system(ctx, crs)};
+  if (!cs.pj) return {1.0, 0};
+  double factor = 1.0;
+  proj_cs_get_axis_info(ctx, cs.pj, 0, nullptr, nullptr, nullptr, &factor, nullptr, nullptr, nullptr);
+  return {factor, proj_cs_get_axis_count(ctx, cs.pj)};
+}
+
+}  // namespace
+
+std::optional<std::pair<std::string, std::string>> SourceCrsOf(const ScanInfo& scan, std::optional<int> epsg_override) {
+  if (epsg_override) return std::pair{"EPSG:" + std::to_string(*epsg_override), std::string("epsg-override")};
+  if (!scan.crs_wkt.empty()) return std::pair{scan.crs_wkt, std::string("las-wkt")};
+  if (scan.geokeys) {
+    // GeoTIFF: ProjectedCSTypeGeoKey (3072), else GeographicTypeGeoKey (2048); 32767 = user-defined.
+    for (uint16_t id : {uint16_t{3072}, uint16_t{2048}}) {
+      for (const GeoKey& k : scan.geokeys->keys) {
+        if (k.id == id && k.location == 0 && k.value != 0 && k.value != 32767) {
+          return std::pair{"EPSG:" + std::to_string(k.value), std::string("las-geokeys")};
+        }
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+Georeferencer::Georeferencer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Georeferencer::~Georeferencer() = default;
+
+StatusOr<std::unique_ptr<Georeferencer>> Georeferencer::Create(const std::string& crs, const std::string& crs_source,
+                                                               const std::array<double, 3>& centre) {
+  auto impl = std::make_unique<Impl>();
+  impl->ctx = proj_context_create();
+  if (!impl->ctx) return Internal("PROJ context could not be created");
+  proj_context_set_enable_network(impl->ctx, 0);
+  proj_log_level(impl->ctx, PJ_LOG_NONE);
+
+  PjHolder source{proj_create(impl->ctx, crs.c_str())};
+  if (!source.pj || !proj_is_crs(source.pj)) {
+    return InvalidArgument("unknown CRS '" + crs.substr(0, 120) + "': " + ProjError(impl->ctx));
+  }
+  if (proj_get_type(source.pj) == PJ_TYPE_BOUND_CRS) {
+    PjHolder base{proj_get_source_crs(impl->ctx, source.pj)};
+    std::swap(source.pj, base.pj);
+  }
+  GeoFrame frame;
+  frame.georeferenced = true;
+  frame.crs_source = crs_source;
+  frame.crs_name = proj_get_name(source.pj) ? proj_get_name(source.pj) : "";
+  if (const char* wkt = proj_as_wkt(impl->ctx, source.pj, PJ_WKT2_2019, nullptr)) frame.crs_wkt = wkt;
+  if (const char* auth = proj_get_id_auth_name(source.pj, 0); auth && std::string(auth) == "EPSG") {
+    frame.epsg = std::atoi(proj_get_id_code(source.pj, 0));
+  }
+
+  const PJ_TYPE type = proj_get_type(source.pj);
+  if (type == PJ_TYPE_GEOCENTRIC_CRS) {
+    const double radius = std::hypot(centre[0], centre[1], centre[2]);
+    if (radius < 6.2e6 || radius > 6.5e6) {
+      return InvalidArgument("the CRS is geocentric (" + frame.crs_name + ") but the points lie " +
+                             std::to_string(std::lround(radius / 1000)) +
+                             " km from the Earth's centre: the stored CRS is wrong; pass the right one as epsg");
+    }
+  }
+  // Horizontal part of a compound CRS decides the horizontal unit; a 2D CRS has no vertical axis.
+  PjHolder horizontal{type == PJ_TYPE_COMPOUND_CRS ? proj_crs_get_sub_crs(impl->ctx, source.pj, 0) : nullptr};
+  const auto [unit, axes] = AxisUnit(impl->ctx, horizontal.pj ? horizontal.pj : source.pj);
+  const bool has_vertical = type == PJ_TYPE_COMPOUND_CRS || type == PJ_TYPE_GEOCENTRIC_CRS || axes == 3;
+  if (has_vertical) {
+    frame.vertical = "from the CRS (without geoid grids, orthometric heights are used as ellipsoidal)";
+  } else {
+    impl->z_scale = type == PJ_TYPE_PROJECTED_CRS ? unit : 1.0;
+    frame.vertical = "no vertical CRS: Z taken in the horizontal unit and used as ellipsoidal height";
+  }
+  frame.vertical_unit_m = impl->z_scale;
+
+  PjHolder wgs84{proj_create(impl->ctx, "EPSG:4979")};
+  PjHolder raw{proj_create_crs_to_crs_from_pj(impl->ctx, source.pj, wgs84.pj, nullptr, nullptr)};
+  if (!raw.pj) return InvalidArgument("no transformation from " + frame.crs_name + " to WGS84: " + ProjError(impl->ctx));
+  impl->to_geographic = proj_normalize_for_visualization(impl->ctx, raw.pj);
+  if (!impl->to_geographic) return Internal("PROJ could not normalize the axis order: " + ProjError(impl->ctx));
+
+  std::unique_ptr<Georeferencer> out(new Georeferencer(std::move(impl)));
+  std::array<double, 3> origin = centre;
+  RETURN_IF_ERROR(out->ToGeographic(std::span(&origin, 1)));
+  frame.origin_llh = origin;
+  out->impl_->enu.Reset(origin[0], origin[1], origin[2]);
+
+  std::vector<double> rotation(9);  // ENU -> ECEF, row-major
+  double ecef[3];
+  GeographicLib::Geocentric::WGS84().Forward(origin[0], origin[1], origin[2], ecef[0], ecef[1], ecef[2], rotation);
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) frame.enu_to_ecef[col * 4 + row] = rotation[row * 3 + col];
+  }
+  frame.enu_to_ecef[12] = ecef[0];
+  frame.enu_to_ecef[13] = ecef[1];
+  frame.enu_to_ecef[14] = ecef[2];
+  frame.enu_to_ecef[15] = 1.0;
+  out->frame_ = std::move(frame);
+  return out;
+}
+
+Status Georeferencer::ToGeographic(std::span<std::array<double, 3>> points) const {
+  if (points.empty()) return Status::Ok();
+  if (impl_->z_scale != 1.0) {
+    for (auto& p : points) p[2] *= impl_->z_scale;
+  }
+  constexpr size_t stride = sizeof(std::array<double, 3>);
+  proj_trans_generic(impl_->to_geographic, PJ_FWD, &points[0][0], stride, points.size(), &points[0][1], stride,
+                     points.size(), &points[0][2], stride, points.size(), nullptr, 0, 0);
+  for (auto& p : points) {
+    // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || std::abs(p[1]) > 90.0) {
+      return InvalidArgument("coordinates outside the domain of " + frame_.crs_name + ": PROJ cannot transform them");
+    }
+    std::swap(p[0], p[1]);
+  }
+  return Status::Ok();
+}
+
+Status Georeferencer::ToEnu(std::span<std::array<double, 3>> points) const {
+  RETURN_IF_ERROR(ToGeographic(points));
+  for (auto& p : points) impl_->enu.Forward(p[0], p[1], p[2], p[0], p[1], p[2]);
+  return Status::Ok();
+}
+
+EnuReader::EnuReader(std::unique_ptr<ScanReader> source, std::unique_ptr<Georeferencer> georeferencer)
+    : source_(std::move(source)), georeferencer_(std::move(georeferencer)) {
+  info_ = source_->info();
+  info_.header_bounds.reset();  // in source units, meaningless in ENU
+}
+
+StatusOr<size_t> EnuReader::Read(PointBatch& batch, size_t max_points) {
+  ASSIGN_OR_RETURN(const size_t n, source_->Read(batch, max_points));
+  max_color_seen_ = source_->max_color_seen();
+  RETURN_IF_ERROR(georeferencer_->ToEnu(batch.xyz));
+  return n;
+}
+
+namespace {
+
+// The header's bounds, when the first points of the scan lie inside them.
+std::optional<Bounds> TrustworthyHeaderBounds(ScanReader& reader) {
+  const auto& bounds = reader.info().header_bounds;
+  if (!bounds) return std::nullopt;
+  PointBatch batch;
+  auto n = reader.Read(batch, 4096);
+  const Status rewound = reader.Rewind();
+  if (!n.ok() || *n == 0 || !rewound.ok()) return std::nullopt;
+  for (const auto& p : batch.xyz) {
+    for (int a = 0; a < 3; ++a) {
+      if (!(p[a] >= bounds->min[a] && p[a] <= bounds->max[a])) return std::nullopt;
+    }
+  }
+  return bounds;
+}
+
+}  // namespace
+
+StatusOr<FramedReader> OpenScanInFrame(const std::filesystem::path& path, std::optional<int> epsg) {
+  FramedReader out;
+  ASSIGN_OR_RETURN(out.reader, OpenScan(path));
+  const auto crs = SourceCrsOf(out.reader->info(), epsg);
+  if (!crs) {
+    out.frame.crs_source = "none";
+    out.frame.vertical = "the scan's own frame and units (no CRS stored or given)";
+    return out;
+  }
+  std::optional<Bounds> bounds = TrustworthyHeaderBounds(*out.reader);
+  if (!bounds) {
+    ASSIGN_OR_RETURN(const ScanSurvey survey, SurveyScan(*out.reader));
+    bounds = survey.bounds;
+  }
+  const std::array<double, 3> centre = {(bounds->min[0] + bounds->max[0]) / 2, (bounds->min[1] + bounds->max[1]) / 2,
+                                        (bounds->min[2] + bounds->max[2]) / 2};
+  ASSIGN_OR_RETURN(std::unique_ptr<Georeferencer> georeferencer, Georeferencer::Create(crs->first, crs->second, centre));
+  out.frame = georeferencer->frame();
+  out.reader = std::make_unique<EnuReader>(std::move(out.reader), std::move(georeferencer));
+  return out;
+}
+
+nlohmann::json DescribeFrame(const GeoFrame& frame) {
+  nlohmann::json out = {{"georeferenced", frame.georeferenced}, {"crs_source", frame.crs_source}, {"vertical", frame.vertical}};
+  if (!frame.georeferenced) return out;
+  out["crs_name"] = frame.crs_name;
+  out["crs_wkt"] = frame.crs_wkt;
+  out["epsg"] = frame.epsg ? nlohmann::json(*frame.epsg) : nlohmann::json();
+  out["vertical_unit_m"] = frame.vertical_unit_m;
+  out["enu_origin"] = {{"lat", frame.origin_llh[0]}, {"lon", frame.origin_llh[1]}, {"h", frame.origin_llh[2]}};
+  out["enu_to_ecef"] = frame.enu_to_ecef;
+  return out;
+}
+
+}  // namespace pointdag

@@ -1,0 +1,113 @@
+#include "pointdag/tile/tiler.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+
+uint64_t TileSet::stored_bytes() const {
+  uint64_t total = 0;
+  for (const Tile& t : tiles) total += t.bytes.size();
+  return total;
+}
+
+VoxelGrid LevelGrid(const VoxelGrid& finest, int level, int tile_depth) {
+  const int tile = std::min(tile_depth, finest.depth);
+  const int coarsening = finest.depth - tile - level;
+  const int shift = 3 * coarsening;
+  VoxelGrid out;
+  out.depth = tile + level;
+  out.origin = finest.origin;
+  out.voxel_size = std::ldexp(finest.voxel_size, coarsening);
+  out.points_in = finest.points_in;
+  out.source_color_bits = finest.source_color_bits;
+  for (size_t i = 0; i < finest.morton.size();) {
+    const uint64_t code = finest.morton[i] >> shift;
+    std::array<uint64_t, 3> sum{0, 0, 0};
+    size_t j = i;
+    for (; j < finest.morton.size() && (finest.morton[j] >> shift) == code; ++j) {
+      if (finest.has_color()) {
+        sum[0] += finest.colors[j].r;
+        sum[1] += finest.colors[j].g;
+        sum[2] += finest.colors[j].b;
+      }
+    }
+    out.morton.push_back(code);
+    if (finest.has_color()) {
+      const uint64_t n = j - i;
+      const auto mean = [n](uint64_t s) { return static_cast<uint8_t>((s + n / 2) / n); };
+      out.colors.push_back({mean(sum[0]), mean(sum[1]), mean(sum[2])});
+    }
+    i = j;
+  }
+  return out;
+}
+
+StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, const std::string& source_name,
+                             const TilingOptions& options) {
+  if (finest.morton.empty()) return InvalidArgument("no voxels to tile");
+  TileSet set;
+  set.tile_depth = std::min(options.tile_depth, finest.depth);
+  set.levels = finest.depth - set.tile_depth + 1;
+  const int local_bits = 3 * set.tile_depth;
+  const uint64_t local_mask = (uint64_t{1} << local_bits) - 1;
+
+  struct Pending {
+    TileKey key;
+    const VoxelGrid* level;
+    size_t first, end;
+  };
+  std::vector<VoxelGrid> levels;
+  levels.reserve(static_cast<size_t>(set.levels));
+  std::vector<Pending> pending;
+  for (int l = 0; l < set.levels; ++l) {
+    levels.push_back(LevelGrid(finest, l, set.tile_depth));
+    const VoxelGrid& grid = levels.back();
+    for (size_t i = 0; i < grid.morton.size();) {
+      const uint64_t tile_code = grid.morton[i] >> local_bits;
+      size_t j = i;
+      while (j < grid.morton.size() && (grid.morton[j] >> local_bits) == tile_code) ++j;
+      const auto [x, y, z] = MortonDecode(tile_code);
+      pending.push_back({{l, x, y, z}, &grid, i, j});
+      i = j;
+    }
+  }
+
+  EncodeOptions encode;
+  encode.geometry_coder = options.geometry_coder;
+  encode.colors = options.colors;
+  encode.mipmap = true;
+  set.tiles.resize(pending.size());
+  std::vector<Status> failures(pending.size());
+  std::atomic<uint64_t> done{0};
+  tbb::parallel_for(size_t{0}, pending.size(), [&](size_t t) {
+    const Pending& p = pending[t];
+    VoxelGrid grid;
+    grid.depth = set.tile_depth;
+    grid.voxel_size = p.level->voxel_size;
+    const double span = std::ldexp(grid.voxel_size, set.tile_depth);
+    grid.origin = {finest.origin[0] + p.key.x * span, finest.origin[1] + p.key.y * span, finest.origin[2] + p.key.z * span};
+    grid.points_in = finest.points_in;
+    grid.source_color_bits = finest.source_color_bits;
+    grid.morton.reserve(p.end - p.first);
+    for (size_t i = p.first; i < p.end; ++i) grid.morton.push_back(p.level->morton[i] & local_mask);
+    if (p.level->has_color()) grid.colors.assign(p.level->colors.begin() + static_cast<long>(p.first), p.level->colors.begin() + static_cast<long>(p.end));
+    auto encoded = EncodeGrid(std::move(grid), scan, source_name, encode);
+    if (!encoded.ok()) {
+      failures[t] = encoded.status();
+      return;
+    }
+    encoded->file.meta["tile"] = {{"level", p.key.level}, {"x", p.key.x}, {"y", p.key.y}, {"z", p.key.z}};
+    set.tiles[t] = {p.key, p.end - p.first, SerializePdag(encoded->file)};
+    const uint64_t finished = ++done;
+    if (options.progress) options.progress(finished, pending.size());
+  });
+  for (const Status& s : failures) RETURN_IF_ERROR(s);
+  return set;
+}
+
+}  // namespace pointdag

@@ -1,0 +1,55 @@
+// Stage 7: an octree of LOD tiles over the voxel cube.
+//
+// Contract: the finest voxels (depth D, sorted Morton codes) are cut into levels 0..L, L = D - T,
+// where T = min(8, D) is the tile depth: every tile spans 2^T voxels per side. Level l is the whole
+// scan at voxel size finest * 2^(L-l); its voxel codes are the finest codes shifted right by 3(L-l)
+// bits, with the exact mean color of the finest voxels each covers. Tile (l, x, y, z) holds the
+// level-l voxels whose top 3l code bits are (x, y, z) interleaved; its children are the eight
+// tiles (l+1, 2x+i, 2y+j, 2z+k) at twice the resolution (replace refinement). Each tile is a
+// self-contained .pdag (proto/PDAG_FORMAT.md) with mipmapped colors, its world origin and voxel
+// size in its metadata, and a "tile" member {level, x, y, z}. Empty tiles do not exist.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "pointdag/pipeline.h"
+
+namespace pointdag {
+
+struct TileKey {
+  int level = 0;
+  uint32_t x = 0, y = 0, z = 0;
+  friend bool operator==(const TileKey&, const TileKey&) = default;
+  friend auto operator<=>(const TileKey&, const TileKey&) = default;
+};
+
+struct Tile {
+  TileKey key;
+  uint64_t voxels = 0;
+  std::vector<uint8_t> bytes;  // a serialized .pdag
+};
+
+struct TilingOptions {
+  int tile_depth = 8;
+  GeometryCoder geometry_coder = GeometryCoder::kContext;
+  ColorEncodeOptions colors{ColorCodec::kVariableRate, 38.0};
+  ProgressFn progress;  // (tiles done, tiles total)
+};
+
+struct TileSet {
+  int levels = 0;      // L + 1
+  int tile_depth = 0;  // T
+  std::vector<Tile> tiles;  // sorted by key
+  uint64_t stored_bytes() const;
+};
+
+// `finest` holds the voxels at the finest level; `scan` and `source_name` go into each tile's metadata.
+StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, const std::string& source_name,
+                             const TilingOptions& options);
+
+// The voxels of one level (codes of depth T + level, mean colors), as BuildTiles cuts them.
+VoxelGrid LevelGrid(const VoxelGrid& finest, int level, int tile_depth);
+
+}  // namespace pointdag
