@@ -10,6 +10,7 @@
 #include <random>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -19,6 +20,7 @@
 #include "pointdag/color/block_codec.h"
 #include "pointdag/compare/draco_compare.h"
 #include "pointdag/compare/scorecard.h"
+#include "pointdag/ingest.h"
 #include "pointdag/pipeline.h"
 
 namespace pointdag {
@@ -98,13 +100,13 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel, uint64_t
 }
 
 // Each case runs in its own child process so that peak RSS is that case's alone.
-nlohmann::json RunCaseIsolated(const std::filesystem::path& scan, double voxel, uint64_t max_points_in_memory) {
+nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlohmann::json()>& run_case) {
   int fds[2];
   if (pipe(fds) != 0) return {{"error", "pipe failed"}};
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    const std::string line = RunCase(scan, voxel, max_points_in_memory).dump();
+    const std::string line = run_case().dump();
     [[maybe_unused]] const ssize_t n = write(fds[1], line.data(), line.size());
     close(fds[1]);
     _exit(0);
@@ -117,7 +119,7 @@ nlohmann::json RunCaseIsolated(const std::filesystem::path& scan, double voxel, 
   int status = 0;
   waitpid(pid, &status, 0);
   auto result = nlohmann::json::parse(text, nullptr, false);
-  if (result.is_discarded()) return {{"scan", scan.filename().string()}, {"error", "benchmark child crashed"}};
+  if (result.is_discarded()) return {{"scan", scan_name}, {"error", "benchmark child crashed"}};
   return result;
 }
 
@@ -168,6 +170,72 @@ std::vector<std::filesystem::path> ScansIn(const std::string& dir) {
   }
   std::sort(scans.begin(), scans.end());
   return scans;
+}
+
+// The daemon's pipeline (read, georeference, voxelize, tile, Draco) on one scan at its derived voxel size.
+nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_points_in_memory) {
+  malloc_trim(0);
+  std::ofstream("/proc/self/clear_refs") << "5";
+  const uint64_t baseline = RssAndPeak().first;
+  IngestOptions options;
+  options.max_points_in_memory = max_points_in_memory;
+  if (scan.filename() == "lone_star_tls_noRGB.las") options.epsg = 26912;  // its stored CRS is wrong
+  auto ingested = IngestScan(scan, options);
+  if (!ingested.ok()) return {{"scan", scan.filename().string()}, {"error", ingested.status().ToString()}};
+  const uint64_t peak = RssAndPeak().second;
+  const double points = static_cast<double>(ingested->grid.points_in);
+  uint64_t finest_bytes = 0;
+  for (const Tile& t : ingested->tiles.tiles) {
+    if (t.key.level == ingested->tiles.levels - 1) finest_bytes += t.bytes.size();
+  }
+  const double finest_bpv = 8.0 * static_cast<double>(finest_bytes) / static_cast<double>(ingested->grid.morton.size());
+  return {{"scan", scan.filename().string()},
+          {"points", ingested->grid.points_in},
+          {"georeferenced", ingested->frame.georeferenced},
+          {"voxel", ingested->grid.voxel_size},
+          {"voxels", ingested->grid.morton.size()},
+          {"levels", ingested->tiles.levels},
+          {"tiles", ingested->tiles.tiles.size()},
+          {"all_levels_bits_per_point", 8.0 * static_cast<double>(ingested->tiles.stored_bytes()) / points},
+          {"finest_bits_per_voxel", finest_bpv},
+          {"draco_bits_per_point", ingested->draco.bits_per_point},
+          {"voxelize_s", ingested->voxelize_seconds},
+          {"tile_s", ingested->tile_seconds},
+          {"draco_s", ingested->compare_seconds},
+          {"total_s", ingested->seconds},
+          {"points_per_s", points / ingested->seconds},
+          {"peak_rss_over_baseline_bytes", peak - baseline}};
+}
+
+int RunIngestBench(const BenchOptions& options) {
+  if (!options.json) {
+    std::printf("machine: %s; IngestScan as pointdagd runs it (derived voxel, VBR tiles at 38 dB, Draco kd-tree level 10)\n",
+                MachineName().c_str());
+    std::printf("| scan | points | ENU | voxel | voxels | levels | tiles | all levels b/pt | finest b/vox | Draco b/pt | "
+                "voxelize s | tile s | Draco s | total s | Mpt/s | peak RSS MiB (net) |\n|");
+    for (int i = 0; i < 16; ++i) std::printf("---|");
+    std::printf("\n");
+  }
+  for (const auto& scan : ScansIn(options.data_dir)) {
+    const nlohmann::json r = RunIsolated(scan.filename().string(), [&] { return RunIngestCase(scan, options.max_points_in_memory); });
+    if (options.json) {
+      std::cout << r.dump() << std::endl;
+      continue;
+    }
+    if (r.contains("error")) {
+      std::printf("| %s | error: %s |\n", scan.filename().c_str(), r["error"].get<std::string>().c_str());
+      continue;
+    }
+    std::printf("| %s | %llu | %s | %g | %llu | %d | %llu | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f |\n",
+                scan.filename().c_str(), r["points"].get<unsigned long long>(), r["georeferenced"].get<bool>() ? "yes" : "no",
+                r["voxel"].get<double>(), r["voxels"].get<unsigned long long>(), r["levels"].get<int>(),
+                r["tiles"].get<unsigned long long>(), r["all_levels_bits_per_point"].get<double>(),
+                r["finest_bits_per_voxel"].get<double>(), r["draco_bits_per_point"].get<double>(), r["voxelize_s"].get<double>(),
+                r["tile_s"].get<double>(), r["draco_s"].get<double>(), r["total_s"].get<double>(),
+                r["points_per_s"].get<double>() / 1e6, r["peak_rss_over_baseline_bytes"].get<double>() / (1024.0 * 1024.0));
+    std::fflush(stdout);
+  }
+  return 0;
 }
 
 // Rate-distortion of every color codec, and decoding speed, at each scan's first voxel size.
@@ -226,6 +294,7 @@ int RunColorBench(const BenchOptions& options) {
 
 int RunBench(const BenchOptions& options) {
   if (options.colors) return RunColorBench(options);
+  if (options.ingest) return RunIngestBench(options);
   const auto scans = ScansIn(options.data_dir);
   if (!options.json) {
     std::printf("machine: %s; one core (the codec core is single-threaded); times are the best of 3 runs\n",
@@ -238,7 +307,8 @@ int RunBench(const BenchOptions& options) {
     const auto it = kVoxelSizes.find(scan.filename().string());
     if (it == kVoxelSizes.end()) continue;
     for (double voxel : {it->second.first, it->second.second}) {
-      const nlohmann::json r = RunCaseIsolated(scan, voxel, options.max_points_in_memory);
+      const nlohmann::json r =
+          RunIsolated(scan.filename().string(), [&] { return RunCase(scan, voxel, options.max_points_in_memory); });
       if (options.json) {
         std::cout << r.dump() << std::endl;
         continue;

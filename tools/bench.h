@@ -10,6 +10,7 @@ struct BenchOptions {
   std::string data_dir = "../shared/data";
   bool json = false;
   bool colors = false;  // the color codecs' rate-distortion table and decoding speed instead
+  bool ingest = false;  // the daemon's pipeline per scan: stage times, points/s, peak RSS
   uint64_t max_points_in_memory = uint64_t{1} << 25;
 };
 

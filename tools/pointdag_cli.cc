@@ -239,6 +239,7 @@ int Main(int argc, char** argv) {
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
   bench->add_flag("--json", bench_options.json, "print JSON lines instead of a table");
   bench->add_flag("--colors", bench_options.colors, "color codecs: rate-distortion table and decoding speed");
+  bench->add_flag("--ingest", bench_options.ingest, "the daemon's ingest pipeline per scan: stage times, points/s, peak RSS");
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
 
   try {

@@ -11,7 +11,6 @@ namespace pointdag {
 namespace {
 
 constexpr int kZstdLevel = 19;
-constexpr int kSearchSteps = 8;
 
 StatusOr<std::vector<uint8_t>> LosslessPayload(std::span<const Rgb8> colors) {
   // Planar differences: neighbours in Morton order are usually alike, so most bytes are near zero.
@@ -186,7 +185,7 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
     hi = allowed / 2;
     ASSIGN_OR_RETURN(best, EncodeBlocksAt(colors, options.codec, 0));
   }
-  for (int step = 0; step < kSearchSteps; ++step) {
+  for (int step = 0; step < options.search_steps; ++step) {
     const double mid = lo > 0 ? std::sqrt(lo * hi) : hi / 8;  // geometric once a passing point is known
     ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, options.codec, mid));
     if (trial.psnr.y >= target) {

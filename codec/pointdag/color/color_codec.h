@@ -32,6 +32,7 @@ struct ColorEncodeOptions {
   Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
   int image_quality = 90;               // jpeg/webp when no target is given
   int astc_footprint = 6;               // astc when no target is given
+  int search_steps = 8;                 // block codecs: refinements of the threshold after bracketing
 };
 
 bool IsLossy(ColorCodec codec);

@@ -8,7 +8,7 @@
 
 namespace pointdag {
 
-StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid) {
+StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid, DracoSearch search) {
   const size_t n = grid.morton.size();
   if (n == 0) return InvalidArgument("no voxels to encode");
   std::vector<uint32_t> cells(3 * n);
@@ -29,8 +29,12 @@ StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid) {
 
   DracoResult best;
   draco::EncoderBuffer best_buffer;
-  for (int method : {draco::POINT_CLOUD_KD_TREE_ENCODING, draco::POINT_CLOUD_SEQUENTIAL_ENCODING}) {
-    for (int speed = 0; speed <= 10; ++speed) {
+  const std::vector<int> methods = search == DracoSearch::kExhaustive
+                                        ? std::vector<int>{draco::POINT_CLOUD_KD_TREE_ENCODING, draco::POINT_CLOUD_SEQUENTIAL_ENCODING}
+                                        : std::vector<int>{draco::POINT_CLOUD_KD_TREE_ENCODING};
+  const int slowest = search == DracoSearch::kExhaustive ? 10 : 0;
+  for (int method : methods) {
+    for (int speed = 0; speed <= slowest; ++speed) {
       draco::Encoder encoder;
       encoder.SetEncodingMethod(method);
       encoder.SetSpeedOptions(speed, speed);

@@ -1,0 +1,64 @@
+#include "metrics.h"
+
+#include <sstream>
+
+namespace pointdag::server {
+namespace {
+constexpr const char* kBucketLabels[] = {"0.0005", "0.001", "0.0025", "0.005", "0.01", "0.025", "0.05", "0.1", "0.25", "0.5", "1", "5"};
+}  // namespace
+
+void Metrics::CountRequest(const std::string& route, int status, double seconds, uint64_t body_bytes) {
+  std::lock_guard lock(mutex_);
+  ++requests_[{route, status}];
+  auto& buckets = latency_[route];
+  size_t b = 0;
+  while (b < kBuckets.size() && seconds > kBuckets[b]) ++b;
+  ++buckets[b];
+  latency_sum_[route] += seconds;
+  bytes_served_ += body_bytes;
+}
+
+void Metrics::CountIngest(uint64_t points, double seconds) {
+  std::lock_guard lock(mutex_);
+  ingest_points_ += points;
+  ingest_seconds_ += seconds;
+  if (seconds > 0) last_ingest_points_per_s_ = static_cast<double>(points) / seconds;
+}
+
+std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state) const {
+  std::lock_guard lock(mutex_);
+  std::ostringstream out;
+  out << "# HELP pointdag_http_requests_total HTTP requests answered, by route and status.\n"
+      << "# TYPE pointdag_http_requests_total counter\n";
+  for (const auto& [key, n] : requests_) {
+    out << "pointdag_http_requests_total{route=\"" << key.first << "\",status=\"" << key.second << "\"} " << n << "\n";
+  }
+  out << "# HELP pointdag_http_request_duration_seconds Time from a request's header to its response, by route.\n"
+      << "# TYPE pointdag_http_request_duration_seconds histogram\n";
+  for (const auto& [route, buckets] : latency_) {
+    uint64_t cumulative = 0;
+    for (size_t b = 0; b <= kBuckets.size(); ++b) {
+      cumulative += buckets[b];
+      out << "pointdag_http_request_duration_seconds_bucket{route=\"" << route << "\",le=\""
+          << (b < kBuckets.size() ? kBucketLabels[b] : "+Inf")
+          << "\"} " << cumulative << "\n";
+    }
+    out << "pointdag_http_request_duration_seconds_sum{route=\"" << route << "\"} " << latency_sum_.at(route) << "\n"
+        << "pointdag_http_request_duration_seconds_count{route=\"" << route << "\"} " << cumulative << "\n";
+  }
+  out << "# HELP pointdag_http_response_bytes_total Response body bytes sent.\n"
+      << "# TYPE pointdag_http_response_bytes_total counter\n"
+      << "pointdag_http_response_bytes_total " << bytes_served_ << "\n"
+      << "# HELP pointdag_jobs Ingest jobs by state.\n# TYPE pointdag_jobs gauge\n";
+  for (const auto& [state, n] : jobs_by_state) out << "pointdag_jobs{state=\"" << state << "\"} " << n << "\n";
+  out << "# HELP pointdag_ingest_points_total Input points of finished ingests.\n# TYPE pointdag_ingest_points_total counter\n"
+      << "pointdag_ingest_points_total " << ingest_points_ << "\n"
+      << "# HELP pointdag_ingest_seconds_total Wall time of finished ingests.\n# TYPE pointdag_ingest_seconds_total counter\n"
+      << "pointdag_ingest_seconds_total " << ingest_seconds_ << "\n"
+      << "# HELP pointdag_ingest_points_per_second End-to-end throughput of the last finished ingest.\n"
+      << "# TYPE pointdag_ingest_points_per_second gauge\n"
+      << "pointdag_ingest_points_per_second " << last_ingest_points_per_s_ << "\n";
+  return out.str();
+}
+
+}  // namespace pointdag::server

@@ -1,0 +1,32 @@
+// Prometheus text exposition (version 0.0.4) of what the daemon does: requests by route and status,
+// a latency histogram, bytes served, jobs by state, ingest throughput.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <utility>
+
+namespace pointdag::server {
+
+class Metrics {
+ public:
+  void CountRequest(const std::string& route, int status, double seconds, uint64_t body_bytes);
+  void CountIngest(uint64_t points, double seconds);
+  std::string Render(const std::map<std::string, uint64_t>& jobs_by_state) const;
+
+ private:
+  static constexpr std::array<double, 12> kBuckets = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 5};
+  mutable std::mutex mutex_;
+  std::map<std::pair<std::string, int>, uint64_t> requests_;
+  std::map<std::string, std::array<uint64_t, kBuckets.size() + 1>> latency_;  // per route; last = +Inf
+  std::map<std::string, double> latency_sum_;
+  uint64_t bytes_served_ = 0;
+  uint64_t ingest_points_ = 0;
+  double ingest_seconds_ = 0;
+  double last_ingest_points_per_s_ = 0;
+};
+
+}  // namespace pointdag::server

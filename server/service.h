@@ -1,0 +1,98 @@
+// The HTTP API of pointdagd (proto/PROTOCOL.md) as plain functions of a request: no sockets here,
+// so every rule — auth, limits, ETag/304, Range/206/416, CORS — lives in one place the transport
+// (http_server.cc) merely carries.
+#pragma once
+
+#include <filesystem>
+#include <list>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "jobs.h"
+#include "metrics.h"
+#include "store.h"
+
+namespace pointdag::server {
+
+struct HttpRequest {
+  std::string method;
+  std::string target;                          // path and query, as received
+  std::map<std::string, std::string> headers;  // names in lower case
+  std::string body;                            // small bodies only; uploads go to a file
+  std::string Header(const std::string& lower_name) const;
+};
+
+struct HttpResponse {
+  int status = 200;
+  std::vector<std::pair<std::string, std::string>> headers;
+  std::string body;
+  std::string route;  // the metrics label, e.g. "/v1/datasets/{id}/tiles"
+  void SetHeader(const std::string& name, const std::string& value);
+};
+
+struct ServiceConfig {
+  std::string token;  // empty: writes need no token
+  uint64_t max_upload_bytes = uint64_t{4} << 30;
+  std::filesystem::path upload_dir;
+  std::string cors_origin = "*";
+  size_t tile_cache_bytes = size_t{256} << 20;
+};
+
+// Immutable tiles recently served, least recently used dropped first.
+class TileCache {
+ public:
+  explicit TileCache(size_t capacity_bytes) : capacity_(capacity_bytes) {}
+  std::shared_ptr<const StoredTile> Get(const std::string& key);
+  void Put(const std::string& key, std::shared_ptr<const StoredTile> tile);
+  void EraseDataset(const std::string& dataset_id);
+
+ private:
+  using Entry = std::pair<std::string, std::shared_ptr<const StoredTile>>;
+  std::mutex mutex_;
+  size_t capacity_, size_ = 0;
+  std::list<Entry> order_;  // most recent first
+  std::unordered_map<std::string, std::list<Entry>::iterator> index_;
+};
+
+class Service {
+ public:
+  Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig config);
+
+  bool IsUpload(const HttpRequest& request) const;
+  // Uploads, first from the header alone: an answer (401, 400, 413, 503) or nullopt to read the body.
+  std::optional<HttpResponse> AdmitUpload(const HttpRequest& request) const;
+  // Then with the body on disk at `file` (removed unless a job takes it).
+  HttpResponse FinishUpload(const HttpRequest& request, const std::filesystem::path& file);
+  // Every other request.
+  HttpResponse Handle(const HttpRequest& request);
+  // An error answer in the API's JSON form, with CORS.
+  HttpResponse Error(int status, const std::string& message, const std::string& route) const;
+  // CORS headers for every answer.
+  void AddCors(HttpResponse& response) const;
+  const ServiceConfig& config() const { return config_; }
+  void set_ready(bool ready) { ready_ = ready; }
+
+ private:
+  HttpResponse Json(int status, const nlohmann::json& body, const std::string& route) const;
+  bool Authorized(const HttpRequest& request) const;
+  HttpResponse GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key);
+  HttpResponse GetHierarchy(const HttpRequest& request, const std::string& dataset, const TileKey& key);
+  static nlohmann::json JobJson(const JobRecord& job);
+
+  Store& store_;
+  JobQueue& jobs_;
+  Metrics& metrics_;
+  ServiceConfig config_;
+  TileCache cache_;
+  bool ready_ = false;
+};
+
+// "a=1&b=x%20y" -> {a: 1, b: "x y"}.
+std::map<std::string, std::string> ParseQuery(const std::string& query);
+
+}  // namespace pointdag::server

@@ -1,0 +1,86 @@
+// The embedded store: one SQLite file (WAL) holding jobs, datasets and their tiles.
+//
+// Contract: a dataset and all its tiles are written in one transaction together with its job's
+// "done" state, so a reader sees a dataset complete or not at all, and a crash at any point leaves
+// either nothing or everything. Tiles are immutable; their strong ETag (XXH3 of the bytes) is
+// computed once at commit. Safe to call from any thread (one connection for writes, one for reads,
+// each behind its own mutex; WAL lets them proceed together).
+#pragma once
+
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pointdag/tile/tiler.h"
+
+namespace pointdag::server {
+
+struct JobRecord {
+  std::string id;
+  std::string state = "queued";  // queued, running, done, failed
+  std::string stage = "queued";
+  double percent = 0;
+  uint64_t points_in = 0;
+  uint64_t voxels_out = 0;
+  std::string dataset_id;
+  std::string error;
+  std::string upload_path;
+  nlohmann::json params = nlohmann::json::object();  // name, voxel, epsg, quality
+  double created = 0, updated = 0;                    // Unix seconds
+};
+
+struct StoredTile {
+  std::string etag;  // with quotes, as sent
+  std::vector<uint8_t> bytes;
+};
+
+struct HierarchyEntry {
+  TileKey key;
+  uint64_t voxels = 0;
+};
+
+class Store {
+ public:
+  static StatusOr<std::unique_ptr<Store>> Open(const std::filesystem::path& file);
+  ~Store();
+
+  Status CreateJob(const JobRecord& job);
+  Status UpdateJobProgress(const std::string& id, const std::string& stage, double percent, uint64_t points_in,
+                           uint64_t voxels_out);
+  Status SetJobState(const std::string& id, const std::string& state, const std::string& error = "");
+  std::optional<JobRecord> GetJob(const std::string& id);
+  std::vector<JobRecord> JobsInStates(const std::vector<std::string>& states);
+  std::map<std::string, uint64_t> JobCountsByState();
+
+  // One transaction: the dataset row, every tile, and the job marked done with the dataset's id.
+  Status CommitDataset(const std::string& job_id, const std::string& dataset_id, const std::string& name,
+                       const nlohmann::json& meta, const TileSet& tiles);
+  std::optional<nlohmann::json> GetDataset(const std::string& id);
+  std::vector<nlohmann::json> ListDatasets();
+  bool DeleteDataset(const std::string& id);
+
+  std::optional<StoredTile> GetTile(const std::string& dataset_id, const TileKey& key);
+  // Tiles at `key` and up to `depth` levels below it; `more_below` are those of the deepest
+  // level returned that have children of their own (the next pages to ask for).
+  std::vector<HierarchyEntry> TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
+                                         std::vector<TileKey>& more_below);
+
+ private:
+  Store() = default;
+  sqlite3* writer_ = nullptr;
+  sqlite3* reader_ = nullptr;
+  std::mutex write_mutex_, read_mutex_;
+};
+
+// A fresh random identifier: 16 lowercase hex digits.
+std::string NewId();
+
+}  // namespace pointdag::server
