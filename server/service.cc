@@ -255,7 +255,9 @@ HttpResponse Service::FinishUpload(const HttpRequest& request, const std::filesy
   if (!scan.ok()) {
     remove_upload();
     const int status = scan.status().code() == StatusCode::kUnsupported ? 415 : 400;
-    return Error(status, scan.status().ToString(), route);
+    std::string message = scan.status().ToString();  // in the upload's words, not our file's name
+    for (size_t at; (at = message.find(file.string())) != std::string::npos;) message.replace(at, file.string().size(), "the upload");
+    return Error(status, message, route);
   }
   const auto query = ParseQuery(QueryOf(request.target));
   JobRecord job;

@@ -8,12 +8,15 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 
 #include "bench.h"
 #include "pointdag/compare/scorecard.h"
+#include "client.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
 #include "progress.h"
@@ -33,6 +36,8 @@ struct GridChoice {
   std::optional<double> voxel;
   std::optional<int> depth;
   bool mipmap = false;
+  bool georeference = false;
+  std::optional<int> epsg;
   uint64_t chunk_points = EncodeOptions{}.max_points_in_memory;
 };
 
@@ -80,9 +85,23 @@ StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
   return options;
 }
 
+int RunFetch(const std::string& url, std::optional<int> level, const std::string& output) {
+  const auto start = std::chrono::steady_clock::now();
+  auto fetched = client::FetchDataset(url, level);
+  if (!fetched.ok()) return Fail(fetched.status());
+  if (Status s = WriteVoxelsPly(output, fetched->grid); !s.ok()) return Fail(s);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::fprintf(stderr, "%s: level %d, %zu tiles (%llu bytes), %zu voxels of %.6g in %.2f s\n", output.c_str(), fetched->level,
+               fetched->tiles, static_cast<unsigned long long>(fetched->tile_bytes), fetched->grid.morton.size(),
+               fetched->grid.voxel_size, seconds);
+  return 0;
+}
+
 int RunEncode(const std::string& input, const std::string& output, const GridChoice& choice, GeometryCoder coder,
               const ColorEncodeOptions& colors) {
   EncodeOptions options = MakeEncodeOptions(choice, input);
+  options.georeference = choice.georeference || choice.epsg.has_value();
+  options.epsg = choice.epsg;
   options.geometry_coder = coder;
   options.colors = colors;
   auto encoded = EncodeScan(input, options);
@@ -210,6 +229,9 @@ int Main(int argc, char** argv) {
   AddGridOptions(encode, grid);
   encode->add_option("--coder", coder_name, "geometry entropy coder")->check(CLI::IsMember({"context", "zstd"}));
   ColorChoice color_choice;
+  encode->add_flag("--georeference", grid.georeference,
+                   "voxelize in ENU metres about the scan's centre when it has a CRS (as pointdagd does)");
+  encode->add_option("--epsg", grid.epsg, "source CRS override (implies --georeference)")->check(CLI::PositiveNumber);
   auto* quality = encode->add_option("--quality", color_choice.quality,
                                      "target color PSNR-Y in dB (lossy; vbr unless --color-codec fixed3)")
                       ->check(CLI::Range(10.0, 99.0));
@@ -233,6 +255,13 @@ int Main(int argc, char** argv) {
   compare->add_option("input", input, "scan file")->required();
   AddGridOptions(compare, grid);
   compare->add_flag("--json", json, "print JSON");
+
+  std::string url;
+  std::optional<int> level;
+  auto* fetch = app.add_subcommand("fetch", "download a dataset's tiles from pointdagd and decode them to points");
+  fetch->add_option("url", url, "http://HOST:PORT/v1/datasets/ID")->required();
+  fetch->add_option("--level", level, "level of detail (0 = coarsest; default: the finest)")->check(CLI::NonNegativeNumber);
+  fetch->add_option("-o,--output", output, "output .ply (voxel centres in the dataset's frame + RGB)")->required();
 
   BenchOptions bench_options;
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
@@ -266,6 +295,7 @@ int Main(int argc, char** argv) {
   if (info->parsed()) return RunInfo(input, json);
   if (compare->parsed()) return RunCompare(input, grid, json);
   if (bench->parsed()) return RunBench(bench_options);
+  if (fetch->parsed()) return RunFetch(url, level, output);
   return 2;
 }
 
