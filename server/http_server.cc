@@ -31,6 +31,7 @@ namespace {
 constexpr auto kIdleTimeout = std::chrono::seconds(60);
 constexpr auto kUploadTimeout = std::chrono::minutes(30);
 constexpr uint64_t kSmallBodyLimit = 1 << 20;
+constexpr uint64_t kDrainLimit = 8 << 20;
 
 template <typename Fields>
 HttpRequest ToRequest(const http::request_header<Fields>& header) {
@@ -69,7 +70,17 @@ asio::awaitable<void> HttpServer::Impl::Session(tcp::socket socket) {
     if (service.IsUpload(request)) {
       if (auto refusal = service.AdmitUpload(request)) {
         response = std::move(*refusal);
-        keep_alive = false;  // the body was not read
+        // A small body is read and dropped so the client can read the answer and go on; a large
+        // one (or one the client holds back for 100-continue) is refused by closing after the answer.
+        const auto length = header_parser.content_length();
+        if (length && *length <= kDrainLimit && request.Header("expect").empty()) {
+          http::request_parser<http::string_body> drain(std::move(header_parser));
+          drain.body_limit(kDrainLimit);
+          co_await http::async_read(stream, buffer, drain, asio::redirect_error(asio::use_awaitable, ec));
+          if (ec) break;
+        } else {
+          keep_alive = false;
+        }
       } else {
         if (request.Header("expect") == "100-continue") {
           http::response<http::empty_body> go_on{http::status::continue_, 11};

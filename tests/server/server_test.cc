@@ -1,0 +1,350 @@
+// A real pointdagd on loopback, started by the test; requests through the proto/ client.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+
+#include "client.h"
+#include "pointdag/color/color_metrics.h"
+#include "pointdag/pipeline.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+using client::Connection;
+using client::Response;
+constexpr const char* kToken = "s3cret";
+
+// One daemon process: started with a fresh or kept data folder, stopped by a signal of our choice.
+class Daemon {
+ public:
+  explicit Daemon(std::filesystem::path data_dir, std::vector<std::string> extra = {})
+      : data_dir_(std::move(data_dir)), extra_(std::move(extra)) {}
+  ~Daemon() { Stop(SIGKILL); }
+
+  void Start() {
+    const auto port_file = data_dir_ / "port";
+    std::filesystem::create_directories(data_dir_);
+    std::filesystem::remove(port_file);
+    pid_ = fork();
+    if (pid_ == 0) {
+      std::vector<std::string> args = {POINTDAGD, "--listen", "127.0.0.1:0", "--data-dir", (data_dir_ / "var").string(),
+                                       "--port-file", port_file.string(), "--token", kToken};
+      args.insert(args.end(), extra_.begin(), extra_.end());
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      const int log = ::open((data_dir_ / "daemon.log").c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      dup2(log, 1);
+      dup2(log, 2);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+    for (int i = 0; i < 200 && !std::filesystem::exists(port_file); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    ASSERT_TRUE(std::filesystem::exists(port_file)) << "pointdagd did not start; see " << data_dir_ / "daemon.log";
+    const auto bytes = testing::ReadBytes(port_file);
+    port_ = static_cast<uint16_t>(std::stoi(std::string(bytes.begin(), bytes.end())));
+  }
+  void Stop(int signal) {
+    if (pid_ <= 0) return;
+    kill(pid_, signal);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+  }
+  std::unique_ptr<Connection> Connect() const {
+    auto c = Connection::Open("127.0.0.1", port_);
+    EXPECT_TRUE(c.ok()) << c.status().ToString();
+    return c.ok() ? std::move(*c) : nullptr;
+  }
+  uint16_t port() const { return port_; }
+  std::filesystem::path store() const { return data_dir_ / "var" / "store.sqlite"; }
+
+ private:
+  std::filesystem::path data_dir_;
+  std::vector<std::string> extra_;
+  pid_t pid_ = -1;
+  uint16_t port_ = 0;
+};
+
+nlohmann::json Json(const Response& r) { return nlohmann::json::parse(r.body, nullptr, false); }
+
+const std::map<std::string, std::string> kAuth = {{"Authorization", std::string("Bearer ") + kToken}};
+
+// Polls a job until it ends; returns its last state.
+nlohmann::json WaitForJob(Connection& c, const std::string& location) {
+  nlohmann::json job;
+  for (int i = 0; i < 1200; ++i) {
+    job = Json(*c.Request("GET", location));
+    if (job["status"] == "done" || job["status"] == "failed") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return job;
+}
+
+class ServerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = std::filesystem::temp_directory_path() / ("pointdagd-test-" + std::to_string(getpid()));
+    std::filesystem::remove_all(dir_);
+    daemon_ = new Daemon(dir_);
+    daemon_->Start();
+  }
+  static void TearDownTestSuite() {
+    delete daemon_;
+    std::filesystem::remove_all(dir_);
+  }
+  // Uploads a scan and waits for its dataset; returns the dataset's metadata.
+  static nlohmann::json Ingest(const std::filesystem::path& scan, const std::string& query) {
+    auto c = daemon_->Connect();
+    auto posted = c->Upload("/v1/datasets?" + query, scan, kAuth);
+    EXPECT_TRUE(posted.ok());
+    EXPECT_EQ(posted->status, 202) << posted->body;
+    const std::string location = posted->Header("location");
+    EXPECT_EQ(location.rfind("/v1/jobs/", 0), 0u);
+    const nlohmann::json job = WaitForJob(*c, location);
+    EXPECT_EQ(job["status"], "done") << job.dump();
+    if (job["status"] != "done") return {};
+    EXPECT_EQ(job["percent"], 100.0);
+    return Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()));
+  }
+  static inline std::filesystem::path dir_;
+  static inline Daemon* daemon_ = nullptr;
+};
+
+TEST_F(ServerTest, HealthAndMetrics) {
+  auto c = daemon_->Connect();
+  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+  EXPECT_EQ(c->Request("GET", "/readyz")->status, 200);
+  (void)c->Request("GET", "/v1/datasets/none");
+  const Response metrics = *c->Request("GET", "/metrics");
+  EXPECT_EQ(metrics.status, 200);
+  EXPECT_EQ(metrics.Header("content-type"), "text/plain; version=0.0.4");
+  EXPECT_NE(metrics.body.find("pointdag_http_requests_total{route=\"/v1/datasets/{id}\",status=\"404\"} "), std::string::npos);
+  EXPECT_NE(metrics.body.find("pointdag_http_request_duration_seconds_bucket{route=\"/livez\",le=\"+Inf\"} 1"), std::string::npos);
+  EXPECT_NE(metrics.body.find("pointdag_jobs{state=\"failed\"}"), std::string::npos);
+  EXPECT_NE(metrics.body.find("pointdag_ingest_points_per_second"), std::string::npos);
+}
+
+TEST_F(ServerTest, ErrorPathsAnswerWithTheirStatusAndAJsonMessage) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  auto c = daemon_->Connect();
+  const auto tiny = testing::DataDir() / "tiny_1.2-with-color_1065pts.las";
+  const auto error_of = [](const Response& r) { return Json(r)["error"].get<std::string>(); };
+
+  Response r = *c->Upload("/v1/datasets", tiny);  // no token
+  EXPECT_EQ(r.status, 401);
+  EXPECT_EQ(r.Header("www-authenticate"), "Bearer");
+  c = daemon_->Connect();  // the daemon closes a connection whose body it did not read
+  r = *c->Upload("/v1/datasets", tiny, {{"Authorization", "Bearer wrong"}});
+  EXPECT_EQ(r.status, 401);
+
+  c = daemon_->Connect();
+  r = *c->Request("POST", "/v1/datasets", {{"Authorization", std::string("Bearer ") + kToken}, {"Content-Length", "99999999999999"}});
+  EXPECT_EQ(r.status, 413);
+  EXPECT_NE(error_of(r).find("at most"), std::string::npos);
+
+  c = daemon_->Connect();
+  r = *c->Upload("/v1/datasets?voxel=-1", tiny, kAuth);
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(error_of(r), "voxel must be a positive number");
+
+  // LAZ: a LAS header whose point format has the compression bit set.
+  auto laz = testing::ReadBytes(tiny);
+  laz[104] |= 0x80;
+  testing::WriteBytes(scratch / "x.laz", laz);
+  c = daemon_->Connect();
+  r = *c->Upload("/v1/datasets", scratch / "x.laz", kAuth);
+  EXPECT_EQ(r.status, 415);
+  EXPECT_NE(error_of(r).find("LAZ"), std::string::npos) << r.body;
+  testing::WriteBytes(scratch / "note.txt", {'h', 'e', 'l', 'l', 'o'});
+  r = *c->Upload("/v1/datasets", scratch / "note.txt", kAuth);
+  EXPECT_EQ(r.status, 415);
+  EXPECT_EQ(error_of(r), "Unsupported: the upload is not a LAS, PLY or PCD scan (unrecognised first bytes)");
+
+  // Truncated LAS: the reader's message, and no job made.
+  auto truncated = testing::ReadBytes(tiny);
+  truncated.resize(truncated.size() - 1000);
+  testing::WriteBytes(scratch / "cut.las", truncated);
+  r = *c->Upload("/v1/datasets", scratch / "cut.las", kAuth);
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(error_of(r).find("Truncated: LAS header declares 1065 points"), std::string::npos) << r.body;
+  EXPECT_EQ(r.Header("location"), "");
+
+  EXPECT_EQ(c->Request("GET", "/v1/jobs/0000000000000000")->status, 404);
+  EXPECT_EQ(c->Request("GET", "/v1/datasets/0000000000000000")->status, 404);
+  EXPECT_EQ(c->Request("GET", "/v1/datasets/0000000000000000/tiles/0/0/0/0")->status, 404);
+  EXPECT_EQ(c->Request("GET", "/v1/datasets/x/tiles/0/0/zero/0")->status, 400);
+  EXPECT_EQ(c->Request("GET", "/nowhere")->status, 404);
+  r = *c->Request("PUT", "/v1/jobs/x");
+  EXPECT_EQ(r.status, 405);
+  EXPECT_EQ(r.Header("allow"), "GET");
+  r = *c->Request("DELETE", "/v1/datasets/0000000000000000");
+  EXPECT_EQ(r.status, 401);
+}
+
+TEST_F(ServerTest, AWrongStoredCrsFailsTheJobAndStoresNothing) {
+  SKIP_WITHOUT_DATA();
+  auto c = daemon_->Connect();
+  const size_t before = Json(*c->Request("GET", "/v1/datasets"))["datasets"].size();
+  auto r = c->Upload("/v1/datasets?name=lone", testing::DataDir() / "lone_star_tls_noRGB.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const nlohmann::json job = WaitForJob(*c, r->Header("location"));
+  EXPECT_EQ(job["status"], "failed");
+  EXPECT_NE(job["error"].get<std::string>().find("geocentric"), std::string::npos) << job.dump();
+  EXPECT_TRUE(job["dataset_id"].is_null());
+  EXPECT_EQ(Json(*c->Request("GET", "/v1/datasets"))["datasets"].size(), before);
+}
+
+TEST_F(ServerTest, TilesAreImmutableWithEtagRangeAndCors) {
+  SKIP_WITHOUT_DATA();
+  const nlohmann::json meta = Ingest(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", "name=tiny&voxel=10");
+  ASSERT_FALSE(meta.is_null());
+  auto c = daemon_->Connect();
+  const std::string tile = "/v1/datasets/" + meta["id"].get<std::string>() + "/tiles/0/0/0/0";
+  const Response full = *c->Request("GET", tile);
+  ASSERT_EQ(full.status, 200);
+  const std::string etag = full.Header("etag");
+  ASSERT_EQ(etag.size(), 18u);  // "16 hex digits", quoted
+  EXPECT_EQ(full.Header("cache-control"), "public, max-age=31536000, immutable");
+  EXPECT_EQ(full.Header("accept-ranges"), "bytes");
+  EXPECT_EQ(full.Header("access-control-allow-origin"), "*");
+  EXPECT_NE(full.Header("access-control-expose-headers").find("Content-Range"), std::string::npos);
+  EXPECT_TRUE(ParsePdag(std::span(reinterpret_cast<const uint8_t*>(full.body.data()), full.body.size())).ok());
+
+  Response r = *c->Request("GET", tile, {{"If-None-Match", etag}});
+  EXPECT_EQ(r.status, 304);
+  EXPECT_EQ(r.body, "");
+  EXPECT_EQ(r.Header("etag"), etag);
+  EXPECT_EQ(c->Request("GET", tile, {{"If-None-Match", "\"other\""}})->status, 200);
+
+  r = *c->Request("GET", tile, {{"Range", "bytes=10-19"}, {"Accept-Encoding", "gzip"}});
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, full.body.substr(10, 10));
+  EXPECT_EQ(r.Header("content-range"), "bytes 10-19/" + std::to_string(full.body.size()));
+  EXPECT_EQ(r.Header("content-encoding"), "");
+  r = *c->Request("GET", tile, {{"Range", "bytes=-5"}});
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, full.body.substr(full.body.size() - 5));
+  r = *c->Request("GET", tile, {{"Range", "bytes=" + std::to_string(full.body.size()) + "-"}});
+  EXPECT_EQ(r.status, 416);
+  EXPECT_EQ(r.Header("content-range"), "bytes */" + std::to_string(full.body.size()));
+  r = *c->Request("GET", tile, {{"Range", "bytes=0-1"}, {"If-Range", "\"stale\""}});
+  EXPECT_EQ(r.status, 200);  // If-Range mismatch: the whole tile
+
+  r = *c->Request("OPTIONS", tile, {{"Origin", "https://viewer.example"}, {"Access-Control-Request-Method", "GET"},
+                                    {"Access-Control-Request-Headers", "range,if-none-match"}});
+  EXPECT_EQ(r.status, 204);
+  EXPECT_EQ(r.Header("access-control-allow-origin"), "*");
+  EXPECT_NE(r.Header("access-control-allow-headers").find("Range"), std::string::npos);
+  EXPECT_NE(r.Header("access-control-allow-headers").find("If-None-Match"), std::string::npos);
+  EXPECT_NE(r.Header("access-control-allow-methods").find("GET"), std::string::npos);
+
+  const std::string dataset = "/v1/datasets/" + meta["id"].get<std::string>();
+  EXPECT_EQ(c->Request("DELETE", dataset, kAuth)->status, 204);
+  EXPECT_EQ(c->Request("GET", dataset)->status, 404);
+  EXPECT_EQ(c->Request("GET", tile)->status, 404);  // the cache forgot it too
+}
+
+// Every scan with a CRS or without: upload, walk every tile, and compare the finest level with
+// `pointdag encode --georeference` of the same file at the same voxel size.
+class EveryScanTest : public ServerTest, public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(EveryScanTest, FinestLevelEqualsTheCodecOnTheSameVoxels) {
+  SKIP_WITHOUT_DATA();
+  const auto scan = testing::DataDir() / GetParam();
+  const nlohmann::json meta = Ingest(scan, "name=test");
+  ASSERT_FALSE(meta.is_null());
+  EXPECT_GT(meta["draco"]["bits_per_point"].get<double>(), 0);
+  EXPECT_GT(meta["source"]["points"].get<uint64_t>(), 0u);
+  const bool georeferenced = meta["frame"]["georeferenced"].get<bool>();
+  if (georeferenced) {
+    EXPECT_EQ(meta["frame"]["enu_to_ecef"].size(), 16u);
+    EXPECT_TRUE(meta["frame"]["enu_origin"].contains("lat"));
+  }
+  const std::string url = "http://127.0.0.1:" + std::to_string(daemon_->port()) + "/v1/datasets/" + meta["id"].get<std::string>();
+  auto fetched = client::FetchDataset(url, std::nullopt);
+  ASSERT_TRUE(fetched.ok()) << fetched.status().ToString();
+  size_t tiles = fetched->tiles;
+  for (int level = 0; level + 1 < meta["levels"].get<int>(); ++level) {
+    auto coarse = client::FetchDataset(url, level);
+    ASSERT_TRUE(coarse.ok());
+    tiles += coarse->tiles;
+    EXPECT_LT(coarse->grid.morton.size(), fetched->grid.morton.size());
+  }
+  EXPECT_EQ(tiles, meta["tile_count"].get<size_t>());
+
+  EncodeOptions options;
+  options.voxel_size = meta["voxel_size"].get<double>();
+  options.georeference = true;
+  auto encoded = EncodeScan(scan, options);
+  ASSERT_TRUE(encoded.ok());
+  EXPECT_EQ(fetched->grid.voxel_size, encoded->grid.voxel_size);
+  EXPECT_EQ(fetched->grid.origin, encoded->grid.origin);
+  ASSERT_EQ(fetched->grid.morton, encoded->grid.morton);
+  if (encoded->grid.has_color()) {
+    EXPECT_GE(MeasureColorPsnr(encoded->grid.colors, fetched->grid.colors).y, 38.0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, EveryScanTest,
+                         ::testing::Values("tiny_1.2-with-color_1065pts.las", "autzen_trim_pdrf3_rgb.las",
+                                           "autzen_trim_las14_pdrf7_rgb.las", "ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las",
+                                           "lion_takanawa_pdrf7_rgb.las", "pcx_guanyin_cc-by-4.0_rgb.ply",
+                                           "pcl_milk_cartoon_clorox_kinect_rgb.ply"),
+                         [](const auto& param_info) {
+                           std::string name = param_info.param;
+                           for (char& ch : name) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+                           return name;
+                         });
+
+int64_t Count(const std::filesystem::path& store, const std::string& sql) {
+  sqlite3* db = nullptr;
+  sqlite3_open_v2(store.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+  sqlite3_stmt* s = nullptr;
+  sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr);
+  const int64_t n = sqlite3_step(s) == SQLITE_ROW ? sqlite3_column_int64(s, 0) : -1;
+  sqlite3_finalize(s);
+  sqlite3_close(db);
+  return n;
+}
+
+TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  daemon.Start();
+  auto c = daemon.Connect();
+  auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const std::string location = r->Header("location");
+  // Kill it while tiles are being encoded (the longest stage).
+  for (int i = 0; i < 400; ++i) {
+    const auto job = Json(*c->Request("GET", location));
+    if (job["stage"] == "tile") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  daemon.Stop(SIGKILL);
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 0);
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM tiles"), 0);
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM jobs WHERE state = 'running'"), 1);
+
+  daemon.Start();
+  c = daemon.Connect();
+  const nlohmann::json job = WaitForJob(*c, location);
+  EXPECT_EQ(job["status"], "done") << job.dump();
+  const auto meta = Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()));
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM tiles"), meta["tile_count"].get<int64_t>());
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 1);
+  EXPECT_TRUE(std::filesystem::is_empty(scratch.path() / "var" / "uploads"));  // the upload is gone once used
+}
+
+}  // namespace
+}  // namespace pointdag
