@@ -75,7 +75,9 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
     std::vector<Rgb8> colors;
     for (const Tile& t : set->tiles) {
       if (t.key.level != level) continue;
-      if (level > 0) EXPECT_TRUE(keys.count({level - 1, t.key.x / 2, t.key.y / 2, t.key.z / 2})) << "orphan tile";
+      if (level > 0) {
+        EXPECT_TRUE(keys.count({level - 1, t.key.x / 2, t.key.y / 2, t.key.z / 2})) << "orphan tile";
+      }
       auto decoded = DecodePdag(*ParsePdag(t.bytes));
       ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
       EXPECT_EQ(decoded->meta["tile"]["level"], level);
