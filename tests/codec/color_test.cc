@@ -231,13 +231,8 @@ TEST(ColorCodec, ParsesNames) {
   EXPECT_FALSE(ParseColorCodec("jpeg2000").ok());
 }
 
-struct ScanAtVoxel {
-  const char* file;
-  double voxel;
-};
-
 // Coarse enough voxels to keep the suite quick; every scan with color in ../shared/data.
-const ScanAtVoxel kColorScans[] = {
+const testing::ScanAtVoxel kColorScans[] = {
     {"tiny_1.2-with-color_1065pts.las", 4.0},
     {"autzen_trim_pdrf3_rgb.las", 4.0},
     {"autzen_trim_las14_pdrf7_rgb.las", 4.0},
@@ -247,7 +242,7 @@ const ScanAtVoxel kColorScans[] = {
     {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 0.008},
 };
 
-class LossyTargetTest : public ::testing::TestWithParam<ScanAtVoxel> {};
+class LossyTargetTest : public ::testing::TestWithParam<testing::ScanAtVoxel> {};
 
 TEST_P(LossyTargetTest, EveryLossyCodecMeetsItsTargetPsnr) {
   SKIP_WITHOUT_DATA();
@@ -269,11 +264,7 @@ TEST_P(LossyTargetTest, EveryLossyCodecMeetsItsTargetPsnr) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, LossyTargetTest, ::testing::ValuesIn(kColorScans), [](const auto& param_info) {
-  std::string name = param_info.param.file;
-  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return name;
-});
+INSTANTIATE_TEST_SUITE_P(SharedData, LossyTargetTest, ::testing::ValuesIn(kColorScans), testing::ScanFileName());
 
 TEST(ColorCodec, PipelineStoresAndDecodesLossyColors) {
   SKIP_WITHOUT_DATA();

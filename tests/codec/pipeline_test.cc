@@ -9,12 +9,9 @@ namespace {
 
 using testing::DataDir;
 
-struct ScanCase {
-  const char* file;
-  double voxel;
-};
+using testing::ScanAtVoxel;
 
-const ScanCase kScans[] = {
+const ScanAtVoxel kScans[] = {
     {"tiny_1.2-with-color_1065pts.las", 4.0},
     {"autzen_trim_pdrf3_rgb.las", 4.0},
     {"autzen_trim_las14_pdrf7_rgb.las", 2.0},
@@ -25,7 +22,7 @@ const ScanCase kScans[] = {
     {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 0.004},
 };
 
-class PipelineTest : public ::testing::TestWithParam<ScanCase> {};
+class PipelineTest : public ::testing::TestWithParam<ScanAtVoxel> {};
 
 // voxelize -> DAG -> stored form -> container bytes -> resident -> voxels: exactly the same.
 TEST_P(PipelineTest, RoundTripIsExact) {
@@ -70,17 +67,18 @@ TEST_P(PipelineTest, ChunkedBuildsEqualTheOneGoBuild) {
   EXPECT_EQ(SerializePdag(chunked->file), SerializePdag(whole->file));
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(kScans), [](const auto& param_info) {
-  std::string name = param_info.param.file;
-  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return name;
-});
+INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(kScans), testing::ScanFileName());
+
+// Autzen at 4 ft, the fixed case of the metadata and size regression tests.
+StatusOr<EncodedScan> EncodeAutzenAt4Feet() {
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  return EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+}
 
 TEST(Pipeline, MetadataCarriesSourceCrsAndCodec) {
   SKIP_WITHOUT_DATA();
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  auto encoded = EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  auto encoded = EncodeAutzenAt4Feet();
   ASSERT_TRUE(encoded.ok());
   const auto& meta = encoded->file.meta;
   EXPECT_EQ(meta["source"]["format"], "LAS");
@@ -98,9 +96,7 @@ TEST(Pipeline, MetadataCarriesSourceCrsAndCodec) {
 // fails, the change altered the format or its efficiency: update the numbers deliberately.
 TEST(Pipeline, CompressedSizesAreStable) {
   SKIP_WITHOUT_DATA();
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  auto encoded = EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  auto encoded = EncodeAutzenAt4Feet();
   ASSERT_TRUE(encoded.ok());
   EXPECT_EQ(encoded->file.geometry.size(), 10049u);
   EXPECT_EQ(EncodeDag(encoded->dag, GeometryCoder::kZstd)->size(), 10408u);

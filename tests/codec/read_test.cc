@@ -85,12 +85,7 @@ TEST_P(RealScanTest, ReadsCountsBoundsColorsAndCrs) {
   EXPECT_EQ(total, f.points);
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, RealScanTest, ::testing::ValuesIn(kScans),
-                         [](const auto& param_info) {
-                           std::string name = param_info.param.file;
-                           for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(SharedData, RealScanTest, ::testing::ValuesIn(kScans), testing::ScanFileName());
 
 TEST(LasReader, AutzenGeoKeysNameUserDefinedProjectionAndFeet) {
   SKIP_WITHOUT_DATA();
@@ -320,10 +315,17 @@ TEST(PclReader, BinaryBigEndianPlyWithUcharColors) {
   EXPECT_EQ(batch.rgb[0], (std::array<uint16_t, 3>{10, 20, 30}));
 }
 
+// An ASCII PLY of float x, y, z only, one vertex per row.
+void WriteXyzPly(const std::filesystem::path& path, const std::vector<std::string>& rows) {
+  std::string text = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(rows.size()) +
+                     "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  for (const std::string& row : rows) text += row + "\n";
+  WriteText(path, text);
+}
+
 TEST(PclReader, PlyWithoutColorHasNoColor) {
   ScratchDir dir;
-  WriteText(dir / "n.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                           "property float z\nend_header\n1 2 3\n");
+  WriteXyzPly(dir / "n.ply", {"1 2 3"});
   auto reader = OpenScan(dir / "n.ply");
   ASSERT_TRUE(reader.ok()) << reader.status().ToString();
   EXPECT_FALSE((*reader)->info().has_color);
@@ -331,8 +333,7 @@ TEST(PclReader, PlyWithoutColorHasNoColor) {
 
 TEST(PclReader, NanCoordinateIsAnError) {
   ScratchDir dir;
-  WriteText(dir / "nan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                             "property float z\nend_header\n1 2 3\nnan 2 3\n");
+  WriteXyzPly(dir / "nan.ply", {"1 2 3", "nan 2 3"});
   auto reader = OpenScan(dir / "nan.ply");
   ASSERT_TRUE(reader.ok()) << reader.status().ToString();
   const auto survey = SurveyScan(**reader);

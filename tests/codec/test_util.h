@@ -10,6 +10,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "pointdag/read/byte_io.h"
@@ -134,5 +135,27 @@ inline std::vector<LasPoint> RandomLasPoints(size_t n, uint32_t seed = 1) {
 // Sorted unique random Morton codes on a depth-`depth` grid, clustered on a few surfaces so that
 // the DAG has shared subtrees as well as unique ones.
 std::vector<uint64_t> SurfaceVoxels(int depth, size_t approx, uint32_t seed);
+
+// A scan in ../shared/data and the voxel size a test uses it at.
+struct ScanAtVoxel {
+  const char* file;
+  double voxel;
+};
+
+// gtest's name generator for parameters that are, or have a `file` member naming, a scan file:
+// "autzen_trim_pdrf3_rgb.las" -> "autzen_trim_pdrf3_rgb_las".
+struct ScanFileName {
+  template <typename Param>
+  std::string operator()(const ::testing::TestParamInfo<Param>& param_info) const {
+    std::string name;
+    if constexpr (std::is_convertible_v<Param, const char*>) {
+      name = param_info.param;
+    } else {
+      name = param_info.param.file;
+    }
+    for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    return name;
+  }
+};
 
 }  // namespace pointdag::testing

@@ -15,15 +15,6 @@
 namespace pointdag {
 namespace {
 
-const char* Extension(ImageFormat format) {
-  switch (format) {
-    case ImageFormat::kPng: return ".png";
-    case ImageFormat::kJpeg: return ".jpg";
-    case ImageFormat::kWebp: return ".webp";
-  }
-  return ".bin";
-}
-
 // OpenImageIO plugins pick the format by file name, so images go through a private temporary file.
 class TempImage {
  public:
@@ -33,7 +24,7 @@ class TempImage {
     if (fd >= 0) {
       close(fd);
       std::filesystem::remove(pattern);
-      path_ = pattern + Extension(format);
+      path_ = pattern + "." + ImageFormatName(format);  // OIIO knows png, jpeg and webp by these
     }
   }
   ~TempImage() {
