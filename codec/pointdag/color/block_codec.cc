@@ -7,7 +7,6 @@
 #include <bit>
 #include <cstring>
 #include <memory>
-#include <optional>
 #include <string>
 
 #include "pointdag/entropy/adaptive_codes.h"
@@ -19,72 +18,76 @@ namespace {
 constexpr uint8_t kBlockStreamVersion = 1;
 
 struct Candidate {
-  uint32_t start, length;
+  uint32_t start, length;  // within the macro block
   BlockFit fit;
+  uint32_t failed_with = 0;  // length of the right neighbour a merge with failed (it would fail again)
 };
 
-double Mse(const Candidate& c) { return c.fit.sse / (3.0 * c.length); }
+// A block passes when its MSE per channel, sse / (3 length), is within the threshold. In integers
+// (the Vulkan encoder must decide alike): 1024 sse <= length * scaled, scaled = floor(3072 max_mse).
+struct Threshold {
+  uint64_t scaled;
+  explicit Threshold(double max_mse) : scaled(static_cast<uint64_t>(std::clamp(max_mse * 3072.0, 0.0, 1073741824.0))) {}
+  uint64_t MaxSse(uint32_t length) const { return length * scaled / 1024; }
+};
 
-// Paper IIA's merge passes, from the given blocks, at `bits` per weight.
-std::vector<Candidate> MergePasses(std::span<const Rgb8> colors, std::vector<Candidate> blocks, int bits,
-                                   double max_mse) {
-  const auto fit = [&](uint32_t start, uint32_t length) {
-    return Candidate{start, length, FitBlock(colors.data() + start, length, bits, max_mse * 3.0 * length)};
-  };
+// Paper IIA's merge passes, from the given blocks, at `bits` per weight: each pass walks the blocks
+// and merges a block with its right neighbour where the merged block passes; a block merges at most
+// once per pass; passes repeat until one merges nothing. A pair that failed is not fitted again
+// while both blocks stay as they are. (Trying the left neighbour as well, as
+// IIA does, never changes anything here: a block's left neighbour is unmerged only when their
+// merge has just failed.)
+std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candidate> blocks, int bits, Threshold threshold) {
   for (bool merged_any = true; merged_any;) {
     merged_any = false;
     std::vector<Candidate> out;
-    std::vector<bool> merged;  // parallel to `out`: merged during this pass
     out.reserve(blocks.size());
     for (size_t i = 0; i < blocks.size(); ++i) {
-      std::optional<Candidate> with_left, with_right;
-      if (!out.empty() && !merged.back()) with_left = fit(out.back().start, out.back().length + blocks[i].length);
-      if (i + 1 < blocks.size()) with_right = fit(blocks[i].start, blocks[i].length + blocks[i + 1].length);
-      const bool left_ok = with_left && Mse(*with_left) <= max_mse;
-      const bool right_ok = with_right && Mse(*with_right) <= max_mse;
-      if (left_ok && (!right_ok || Mse(*with_left) <= Mse(*with_right))) {
-        out.back() = *with_left;
-        merged.back() = true;
-        merged_any = true;
-      } else if (right_ok) {
-        out.push_back(*with_right);
-        merged.push_back(true);
-        merged_any = true;
-        ++i;
-      } else {
-        out.push_back(blocks[i]);
-        merged.push_back(false);
+      if (i + 1 < blocks.size() && blocks[i].failed_with != blocks[i + 1].length) {
+        const uint32_t length = blocks[i].length + blocks[i + 1].length;
+        const uint64_t limit = threshold.MaxSse(length);
+        const BlockFit fit = fitter.Fit(blocks[i].start, length, bits, limit);
+        if (fit.sse <= limit) {
+          out.push_back({blocks[i].start, length, fit});
+          merged_any = true;
+          ++i;
+          continue;
+        }
+        blocks[i].failed_with = blocks[i + 1].length;
       }
+      out.push_back(blocks[i]);
     }
     blocks.swap(out);
   }
   return blocks;
 }
 
-std::vector<Candidate> Singletons(std::span<const Rgb8> colors, uint32_t begin, uint32_t end, int bits) {
+std::vector<Candidate> Singletons(const BlockFitter& fitter, uint32_t count, int bits) {
   std::vector<Candidate> blocks;
-  for (uint32_t i = begin; i < end; ++i) blocks.push_back({i, 1, FitBlock(colors.data() + i, 1, bits)});
+  blocks.reserve(count);
+  for (uint32_t i = 0; i < count; ++i) blocks.push_back({i, 1, fitter.Fit(i, 1, bits)});
   return blocks;
 }
 
 // Bits a block costs in the range-coded stream, roughly: header, second endpoint, weights (which the
 // context model codes at ~0.8 of their width). Calibrated on lion at 1 cm; the cut is not sensitive
 // to it (within 2% of file size across the variants tried).
-double BlockCost(uint32_t length, int bits) { return 30 + (bits ? 30 : 0) + double(length) * bits * 0.8; }
+// In fifths of a bit, so that the cut is integer arithmetic (the Vulkan encoder cuts alike).
+uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 4; }
 
 // Paper IIB: the block tree of one macro block (levels 0..4 bits) and its cheapest cut.
-std::vector<ColorBlock> VariableRateMacroBlock(std::span<const Rgb8> colors, uint32_t begin, uint32_t end,
-                                               double max_mse) {
+std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32_t count, Threshold threshold) {
   std::vector<std::vector<Candidate>> levels;
-  levels.push_back(MergePasses(colors, Singletons(colors, begin, end, 0), 0, max_mse));
+  levels.push_back(MergePasses(fitter, Singletons(fitter, count, 0), 0, threshold));
   for (int bits = 1; bits <= kMaxWeightBits; ++bits) {
     std::vector<Candidate> start;  // the previous level's blocks, refitted with more bits
-    for (const Candidate& c : levels.back()) start.push_back({c.start, c.length, FitBlock(colors.data() + c.start, c.length, bits)});
-    levels.push_back(MergePasses(colors, std::move(start), bits, max_mse));
+    start.reserve(levels.back().size());
+    for (const Candidate& c : levels.back()) start.push_back({c.start, c.length, fitter.Fit(c.start, c.length, bits)});
+    levels.push_back(MergePasses(fitter, std::move(start), bits, threshold));
   }
   // Cut bottom-up: best[level][k] is the cheapest way to code block k of that level.
   struct Best {
-    double cost;
+    uint64_t cost;
     bool keep_self;
   };
   std::vector<std::vector<Best>> best(levels.size());
@@ -92,11 +95,11 @@ std::vector<ColorBlock> VariableRateMacroBlock(std::span<const Rgb8> colors, uin
   for (size_t level = 1; level < levels.size(); ++level) {
     size_t child = 0;
     for (const Candidate& c : levels[level]) {
-      double children = 0;
+      uint64_t children = 0;
       for (; child < levels[level - 1].size() && levels[level - 1][child].start < c.start + c.length; ++child) {
         children += best[level - 1][child].cost;
       }
-      const double own = BlockCost(c.length, static_cast<int>(level));
+      const uint64_t own = BlockCost(c.length, static_cast<int>(level));
       best[level].push_back(own < children ? Best{own, true} : Best{children, false});
     }
   }
@@ -114,7 +117,7 @@ std::vector<ColorBlock> VariableRateMacroBlock(std::span<const Rgb8> colors, uin
       }
     }
   };
-  expand(expand, levels.size() - 1, begin, end);
+  expand(expand, levels.size() - 1, 0, count);
   return out;
 }
 
@@ -137,17 +140,20 @@ constexpr int kDifferenceBits = 9;  // zigzag of -255..255, plus one
 std::vector<ColorBlock> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
   // Macro blocks are independent: encode them in parallel, concatenate in order.
   const size_t macros = (colors.size() + kMacroBlockColors - 1) / kMacroBlockColors;
+  const Threshold threshold(max_mse);
   std::vector<std::vector<ColorBlock>> per_macro(macros);
   tbb::parallel_for(size_t{0}, macros, [&](size_t m) {
     const uint32_t begin = static_cast<uint32_t>(m * kMacroBlockColors);
-    const uint32_t end = static_cast<uint32_t>(std::min<size_t>(colors.size(), size_t{begin} + kMacroBlockColors));
+    const uint32_t count = static_cast<uint32_t>(std::min<size_t>(colors.size() - begin, kMacroBlockColors));
+    const BlockFitter fitter(colors.subspan(begin, count));
     if (layout == BlockLayout::kVariableRate) {
-      per_macro[m] = VariableRateMacroBlock(colors, begin, end, max_mse);
+      per_macro[m] = VariableRateMacroBlock(fitter, count, threshold);
     } else {
-      for (const Candidate& c : MergePasses(colors, Singletons(colors, begin, end, kFixedRateBits), kFixedRateBits, max_mse)) {
+      for (const Candidate& c : MergePasses(fitter, Singletons(fitter, count, kFixedRateBits), kFixedRateBits, threshold)) {
         per_macro[m].push_back({c.start, c.length, kFixedRateBits, c.fit.ends});
       }
     }
+    for (ColorBlock& b : per_macro[m]) b.start += begin;
   });
   std::vector<ColorBlock> blocks;
   for (const auto& macro : per_macro) blocks.insert(blocks.end(), macro.begin(), macro.end());

@@ -6,13 +6,13 @@
 // share one decoder and every macro block can be encoded on its own, e.g. by one GPU workgroup).
 //
 // Fixed rate (IIA): every color gets a 3-bit weight. Encoding starts from one block per color; each
-// pass walks the blocks and merges each with its left or right neighbour, whichever merged block has
-// the lower MSE, if that MSE stays within the threshold; a block merges at most once per pass;
-// passes repeat until one merges nothing.
+// pass walks the blocks and merges each with its right neighbour where the merged block stays within
+// the threshold; a block merges at most once per pass; passes repeat until one merges nothing.
 // Variable rate (IIB): the same merging with 0 bits per weight gives the tree's leaves; merging
 // those with 1 bit gives their parents, and so on up to 4 bits. The tree is then cut bottom-up,
 // keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
-// threshold, so every cut does.
+// threshold, so every cut does. All of it is integer arithmetic: the Vulkan encoder (gpu/) returns
+// the same blocks.
 //
 // Decoding one color touches one macro-block entry, a binary search over that macro block's block
 // starts, and one weight: no other block is read.

@@ -3,12 +3,18 @@
 //
 // A block of n colors with b bits per weight stores endpoints A and B; color i is rebuilt as
 // A + (B - A) * w_i / (2^b - 1), rounded per channel. With b = 0 every color is A.
-// FitBlock() finds A and B along the colors' principal axis, picks each weight by projection, then
-// refines A and B by least squares for those weights (keeping the better of the two fits).
+// BlockFitter::Fit() finds A and B along the colors' principal axis, picks each weight by
+// projection, then refines A and B by least squares for those weights (keeping the better fit).
+//
+// Every step is integer arithmetic with a fixed order of operations, so the Vulkan encoder
+// (gpu/shaders/block_encode.comp) reproduces it bit for bit: keep the two in step.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "pointdag/voxelize/voxelizer.h"
 
@@ -18,19 +24,48 @@ constexpr int kMaxWeightBits = 4;
 
 struct Endpoints {
   Rgb8 a, b;
+  friend bool operator==(const Endpoints&, const Endpoints&) = default;
 };
 
 struct BlockFit {
   Endpoints ends;
-  double sse = 0;  // squared error summed over the block's colors and their three channels
+  uint64_t sse = 0;  // squared error summed over the block's colors and their three channels
 };
 
-// `give_up_above`: once the error is known to exceed it, stop and return an error above it (the
-// merge encoder only needs to know that a candidate fails its threshold).
-BlockFit FitBlock(const Rgb8* colors, size_t n, int bits, double give_up_above = 1e300);
+// Fits blocks inside one run of colors (a macro block). Prefix sums of the colors and of their
+// products make a range's mean, covariance and constant-color error O(1), so 0-bit fits never
+// touch the colors and wider fits only walk them to place endpoints and weights.
+class BlockFitter {
+ public:
+  explicit BlockFitter(std::span<const Rgb8> colors);
 
-// The weight that rebuilds `c` best from `ends` (projection onto the segment, rounded).
-uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits);
+  // Colors [begin, begin + length) with `bits` per weight. `give_up_above`: a fit whose error is
+  // known to exceed it may stop early and report any error above it (the merge encoder only needs
+  // to know that a candidate fails its threshold).
+  BlockFit Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above = UINT64_MAX) const;
+
+ private:
+  struct Sums {
+    int64_t s[3];   // sum of r, g, b
+    int64_t ss[6];  // sum of rr, gg, bb, rg, rb, gb
+  };
+  Sums RangeSums(uint32_t begin, uint32_t end) const;
+
+  std::span<const Rgb8> colors_;
+  std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
+};
+
+// The weight that rebuilds `c` best from `ends` (projection onto the segment, rounded half up).
+inline uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits) {
+  if (bits == 0) return 0;
+  const int32_t m = (1 << bits) - 1;
+  const int32_t dr = ends.b.r - ends.a.r, dg = ends.b.g - ends.a.g, db = ends.b.b - ends.a.b;
+  const int32_t len2 = dr * dr + dg * dg + db * db;
+  const int32_t dot = (c.r - ends.a.r) * dr + (c.g - ends.a.g) * dg + (c.b - ends.a.b) * db;
+  if (dot <= 0) return 0;
+  if (dot >= len2) return static_cast<uint32_t>(m);
+  return static_cast<uint32_t>((2 * m * dot + len2) / (2 * len2));
+}
 
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
   if (bits == 0) return e.a;
@@ -39,9 +74,9 @@ inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
   return {mix(e.a.r, e.b.r), mix(e.a.g, e.b.g), mix(e.a.b, e.b.b)};
 }
 
-inline double SquaredError(const Rgb8& x, const Rgb8& y) {
-  const double dr = x.r - y.r, dg = x.g - y.g, db = x.b - y.b;
-  return dr * dr + dg * dg + db * db;
+inline uint32_t SquaredError(const Rgb8& x, const Rgb8& y) {
+  const int32_t dr = x.r - y.r, dg = x.g - y.g, db = x.b - y.b;
+  return static_cast<uint32_t>(dr * dr + dg * dg + db * db);
 }
 
 }  // namespace pointdag

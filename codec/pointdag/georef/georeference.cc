@@ -3,21 +3,53 @@
 #include <GeographicLib/Geocentric.hpp>
 #include <GeographicLib/LocalCartesian.hpp>
 #include <proj.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 
 #include <cmath>
 #include <vector>
 
 namespace pointdag {
 
+// A PJ object is not to be shared between threads: each thread transforms with its own clone,
+// in its own context.
+struct ProjLane {
+  PJ_CONTEXT* ctx = nullptr;
+  PJ* pj = nullptr;
+  ProjLane() = default;
+  ProjLane(const ProjLane&) = delete;
+  ProjLane& operator=(const ProjLane&) = delete;
+  ~ProjLane() {
+    if (pj) proj_destroy(pj);
+    if (ctx) proj_context_destroy(ctx);
+  }
+};
+
 struct Georeferencer::Impl {
   PJ_CONTEXT* ctx = nullptr;
   PJ* to_geographic = nullptr;  // source -> EPSG:4979, axis order normalized to (lon, lat, h)
   double z_scale = 1;           // applied before PROJ when the CRS has no vertical axis
   GeographicLib::LocalCartesian enu;
+  tbb::enumerable_thread_specific<ProjLane> lanes;
 
   ~Impl() {
+    lanes.clear();
     if (to_geographic) proj_destroy(to_geographic);
     if (ctx) proj_context_destroy(ctx);
+  }
+
+  // This thread's clone of to_geographic (null if PROJ could not make one).
+  PJ* Lane() {
+    ProjLane& lane = lanes.local();
+    if (!lane.pj) {
+      lane.ctx = proj_context_create();
+      proj_context_set_enable_network(lane.ctx, 0);
+      proj_log_level(lane.ctx, PJ_LOG_NONE);
+      lane.pj = proj_clone(lane.ctx, to_geographic);
+    }
+    return lane.pj;
   }
 };
 
@@ -135,29 +167,39 @@ StatusOr<std::unique_ptr<Georeferencer>> Georeferencer::Create(const std::string
   return out;
 }
 
-Status Georeferencer::ToGeographic(std::span<std::array<double, 3>> points) const {
-  if (points.empty()) return Status::Ok();
-  if (impl_->z_scale != 1.0) {
-    for (auto& p : points) p[2] *= impl_->z_scale;
-  }
-  constexpr size_t stride = sizeof(std::array<double, 3>);
-  proj_trans_generic(impl_->to_geographic, PJ_FWD, &points[0][0], stride, points.size(), &points[0][1], stride,
-                     points.size(), &points[0][2], stride, points.size(), nullptr, 0, 0);
-  for (auto& p : points) {
-    // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || std::abs(p[1]) > 90.0) {
-      return InvalidArgument("coordinates outside the domain of " + frame_.crs_name + ": PROJ cannot transform them");
+Status Georeferencer::Transform(std::span<std::array<double, 3>> points, bool to_enu) const {
+  // Chunks of the batch on all cores; false once any point fails.
+  std::atomic<bool> all_ok{true};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+    const std::span<std::array<double, 3>> part = points.subspan(r.begin(), r.size());
+    PJ* pj = impl_->Lane();
+    if (!pj) {
+      all_ok = false;
+      return;
     }
-    std::swap(p[0], p[1]);
-  }
+    if (impl_->z_scale != 1.0) {
+      for (auto& p : part) p[2] *= impl_->z_scale;
+    }
+    constexpr size_t stride = sizeof(std::array<double, 3>);
+    proj_trans_generic(pj, PJ_FWD, &part[0][0], stride, part.size(), &part[0][1], stride, part.size(), &part[0][2],
+                       stride, part.size(), nullptr, 0, 0);
+    for (auto& p : part) {
+      // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || std::abs(p[1]) > 90.0) {
+        all_ok = false;
+        return;
+      }
+      std::swap(p[0], p[1]);
+      if (to_enu) impl_->enu.Forward(p[0], p[1], p[2], p[0], p[1], p[2]);
+    }
+  });
+  if (!all_ok) return InvalidArgument("coordinates outside the domain of " + frame_.crs_name + ": PROJ cannot transform them");
   return Status::Ok();
 }
 
-Status Georeferencer::ToEnu(std::span<std::array<double, 3>> points) const {
-  RETURN_IF_ERROR(ToGeographic(points));
-  for (auto& p : points) impl_->enu.Forward(p[0], p[1], p[2], p[0], p[1], p[2]);
-  return Status::Ok();
-}
+Status Georeferencer::ToGeographic(std::span<std::array<double, 3>> points) const { return Transform(points, false); }
+
+Status Georeferencer::ToEnu(std::span<std::array<double, 3>> points) const { return Transform(points, true); }
 
 EnuReader::EnuReader(std::unique_ptr<ScanReader> source, std::unique_ptr<Georeferencer> georeferencer)
     : source_(std::move(source)), georeferencer_(std::move(georeferencer)) {

@@ -56,6 +56,7 @@ class Georeferencer {
  private:
   struct Impl;
   explicit Georeferencer(std::unique_ptr<Impl> impl);
+  Status Transform(std::span<std::array<double, 3>> points, bool to_enu) const;
   std::unique_ptr<Impl> impl_;
   GeoFrame frame_;
 };
