@@ -24,7 +24,7 @@ struct Candidate {
 };
 
 // A block passes when its MSE per channel, sse / (3 length), is within the threshold. In integers
-// (the Vulkan encoder must decide alike): 1024 sse <= length * scaled, scaled = floor(3072 max_mse).
+// (so that the Vulkan port decides alike): 1024 sse <= length * scaled, scaled = floor(3072 max_mse).
 struct Threshold {
   uint64_t scaled;
   explicit Threshold(double max_mse) : scaled(static_cast<uint64_t>(std::clamp(max_mse * 3072.0, 0.0, 1073741824.0))) {}
@@ -72,7 +72,7 @@ std::vector<Candidate> Singletons(const BlockFitter& fitter, uint32_t count, int
 // Bits a block costs in the range-coded stream, roughly: header, second endpoint, weights (which the
 // context model codes at ~0.8 of their width). Calibrated on lion at 1 cm; the cut is not sensitive
 // to it (within 2% of file size across the variants tried).
-// In fifths of a bit, so that the cut is integer arithmetic (the Vulkan encoder cuts alike).
+// In fifths of a bit, so that the cut is integer arithmetic (the Vulkan port cuts alike).
 uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 4; }
 
 // Paper IIB: the block tree of one macro block (levels 0..4 bits) and its cheapest cut.

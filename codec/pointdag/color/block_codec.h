@@ -11,8 +11,8 @@
 // Variable rate (IIB): the same merging with 0 bits per weight gives the tree's leaves; merging
 // those with 1 bit gives their parents, and so on up to 4 bits. The tree is then cut bottom-up,
 // keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
-// threshold, so every cut does. All of it is integer arithmetic: the Vulkan encoder (gpu/) returns
-// the same blocks.
+// threshold, so every cut does. All of it is integer arithmetic, so that the Vulkan port
+// (gpu/shaders/block_encode.comp) can return the same blocks.
 //
 // Decoding one color touches one macro-block entry, a binary search over that macro block's block
 // starts, and one weight: no other block is read.

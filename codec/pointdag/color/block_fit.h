@@ -6,8 +6,8 @@
 // BlockFitter::Fit() finds A and B along the colors' principal axis, picks each weight by
 // projection, then refines A and B by least squares for those weights (keeping the better fit).
 //
-// Every step is integer arithmetic with a fixed order of operations, so the Vulkan encoder
-// (gpu/shaders/block_encode.comp) reproduces it bit for bit: keep the two in step.
+// Every step is integer arithmetic with a fixed order of operations, so that the Vulkan port
+// (gpu/shaders/block_encode.comp) can reproduce it bit for bit: keep the two in step.
 #pragma once
 
 #include <array>

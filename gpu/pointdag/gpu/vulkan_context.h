@@ -1,0 +1,96 @@
+// Vulkan compute: choosing a device, storage buffers, compute kernels from embedded SPIR-V.
+//
+// POINTDAG_DEVICE picks the path for the heavy stages: `cpu` never opens Vulkan; `vulkan` requires a
+// usable device and fails with a clear message otherwise; `auto` (the default) opens the best device
+// (a discrete GPU, then an integrated one, then a virtual one, then Mesa lavapipe on the CPU) and
+// then uses it for a stage where that stage is measured faster there (see StageUsesVulkan). When
+// Vulkan cannot be opened under `auto`, the program says so once (stderr) and runs on the CPU.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pointdag/status.h"
+
+namespace pointdag::gpu {
+
+enum class DeviceChoice { kAuto, kVulkan, kCpu };
+
+StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text);  // "auto" | "vulkan" | "cpu"
+
+// Stages with a Vulkan kernel.
+enum class Stage { kColorBlocks };
+const char* StageName(Stage stage);
+
+class VulkanContext;
+
+// A storage buffer the host can map (host-visible, coherent memory).
+class Buffer {
+ public:
+  Buffer(Buffer&& other) noexcept;
+  Buffer& operator=(Buffer&&) = delete;
+  ~Buffer();
+  void* data() const { return mapped_; }
+  size_t size() const { return size_; }
+
+ private:
+  friend class VulkanContext;
+  Buffer(VulkanContext* context, size_t size) : context_(context), size_(size) {}
+  VulkanContext* context_;
+  size_t size_;
+  void* mapped_ = nullptr;
+  uint64_t buffer_ = 0, memory_ = 0;  // VkBuffer, VkDeviceMemory
+};
+
+// One compute pipeline: `buffers` storage buffers at bindings 0..n-1, push constants of `push_bytes`.
+struct Kernel {
+  uint64_t pipeline = 0, layout = 0, set_layout = 0;  // VkPipeline, VkPipelineLayout, VkDescriptorSetLayout
+  uint32_t buffers = 0, push_bytes = 0;
+};
+
+class VulkanContext {
+ public:
+  // The best device there is, or why there is none.
+  static StatusOr<std::unique_ptr<VulkanContext>> Create();
+  ~VulkanContext();
+  VulkanContext(const VulkanContext&) = delete;
+  VulkanContext& operator=(const VulkanContext&) = delete;
+
+  const std::string& device_name() const { return device_name_; }
+  bool software() const { return software_; }  // a CPU implementation (lavapipe)
+
+  StatusOr<Buffer> CreateBuffer(size_t bytes);
+  StatusOr<const Kernel*> GetKernel(std::string_view name, std::span<const uint32_t> spirv, uint32_t buffers, uint32_t push_bytes);
+  // Records one dispatch of `groups` workgroups, submits it and waits for it.
+  Status Run(const Kernel& kernel, std::span<const Buffer* const> buffers, const void* push, uint32_t groups);
+
+ private:
+  friend class Buffer;
+  struct Impl;
+  explicit VulkanContext(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+  std::string device_name_;
+  bool software_ = false;
+  std::mutex mutex_;  // one queue: submissions from tbb workers take turns
+};
+
+// The process's choice from POINTDAG_DEVICE, made once (thread-safe). Null: the CPU path.
+// An error only when POINTDAG_DEVICE=vulkan and no device opens, or the variable is unknown.
+StatusOr<VulkanContext*> ProcessDevice();
+
+// Whether `stage` runs on Vulkan in this process: always under POINTDAG_DEVICE=vulkan; under auto
+// only on a hardware GPU (on lavapipe each stage measured slower than the CPU path, docs/benchmarks.md).
+StatusOr<VulkanContext*> DeviceFor(Stage stage);
+
+// For logs and /metrics: "cpu" or "vulkan (<device name>)" per stage.
+std::string DescribeDevices();
+
+// Tests: forget the process's choice so the next call reads POINTDAG_DEVICE again.
+void ResetProcessDeviceForTesting();
+
+}  // namespace pointdag::gpu
