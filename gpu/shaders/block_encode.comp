@@ -99,8 +99,9 @@ Fit FitBlock(uint begin, uint length, int bits, uint64_t give_up_above) {
   i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
   Shrink(axis);
   for (int iter = 0; iter < 8; ++iter) {
-    // cov * axis, cov symmetric: row j = column j.
-    i64vec3 next = i64vec3(dot(c0, axis), dot(c1, axis), dot(c2, axis));
+    // cov * axis, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
+    i64vec3 next = i64vec3(c0.x * axis.x + c0.y * axis.y + c0.z * axis.z, c1.x * axis.x + c1.y * axis.y + c1.z * axis.z,
+                          c2.x * axis.x + c2.y * axis.y + c2.z * axis.z);
     if (next.x == 0 && next.y == 0 && next.z == 0) break;
     Shrink(next);
     axis = next;
