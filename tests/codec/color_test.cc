@@ -84,7 +84,7 @@ TEST_P(BlockCodecTest, DecoderReturnsTheEncodersOwnReconstructionAtEveryIndex) {
   const auto [layout, n] = GetParam();
   const auto colors = SyntheticColors(n, static_cast<uint32_t>(n));
   const double max_mse = 20.0;
-  const auto blocks = EncodeBlocks(colors, layout, max_mse);
+  const auto blocks = *EncodeBlocks(colors, layout, max_mse);
   uint64_t next = 0;
   for (const ColorBlock& b : blocks) {
     ASSERT_EQ(b.start, next);
@@ -124,7 +124,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(BlockCodec, EqualColorsBecomeOneZeroBitBlockPerMacroBlock) {
   const std::vector<Rgb8> colors(kMacroBlockColors * 2 + 5, Rgb8{1, 2, 3});
-  const auto blocks = EncodeBlocks(colors, BlockLayout::kVariableRate, 0.0);
+  const auto blocks = *EncodeBlocks(colors, BlockLayout::kVariableRate, 0.0);
   ASSERT_EQ(blocks.size(), 3u);
   for (const ColorBlock& b : blocks) EXPECT_EQ(b.bits, 0);
   auto decoder = BlockColorDecoder::Open(*SerializeBlocks(colors, blocks, BlockLayout::kVariableRate), colors.size());
@@ -134,7 +134,7 @@ TEST(BlockCodec, EqualColorsBecomeOneZeroBitBlockPerMacroBlock) {
 
 TEST(BlockCodec, VariableRateUsesZeroBitBlocksOnFlatRuns) {
   const auto colors = SyntheticColors(20000, 3);
-  const auto blocks = EncodeBlocks(colors, BlockLayout::kVariableRate, 4.0);  // below the noise: gradients need bits
+  const auto blocks = *EncodeBlocks(colors, BlockLayout::kVariableRate, 4.0);  // below the noise: gradients need bits
   size_t zero = 0, wide = 0;
   for (const ColorBlock& b : blocks) {
     zero += b.bits == 0;
@@ -146,7 +146,7 @@ TEST(BlockCodec, VariableRateUsesZeroBitBlocksOnFlatRuns) {
 
 TEST(BlockCodec, CorruptStreamsAreErrorsNotCrashes) {
   const auto colors = SyntheticColors(5000, 9);
-  const auto stream = *SerializeBlocks(colors, EncodeBlocks(colors, BlockLayout::kVariableRate, 10.0), BlockLayout::kVariableRate);
+  const auto stream = *SerializeBlocks(colors, *EncodeBlocks(colors, BlockLayout::kVariableRate, 10.0), BlockLayout::kVariableRate);
   for (size_t len = 0; len < stream.size(); len += 1 + stream.size() / 200) {
     EXPECT_FALSE(BlockColorDecoder::Open(std::span(stream).first(len), colors.size()).ok()) << len;
   }

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <random>
 
+#include "pointdag/color/block_codec.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/vulkan_context.h"
 
@@ -76,6 +78,41 @@ TEST(ColorBlocksKernel, EqualColorsGiveOneZeroBitBlockPerMacroBlock) {
     EXPECT_EQ((*blocks)[k].bits, 0);
     EXPECT_EQ((*blocks)[k].a[0], 1);
     EXPECT_EQ((*blocks)[k].a[2], 3);
+  }
+}
+
+// Blocks from one path, chosen by POINTDAG_DEVICE.
+std::vector<ColorBlock> BlocksOn(const char* device, std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
+  DeviceEnv env(device);
+  auto blocks = EncodeBlocks(colors, layout, max_mse);
+  EXPECT_TRUE(blocks.ok()) << blocks.status().message();
+  return blocks.ok() ? *blocks : std::vector<ColorBlock>{};
+}
+
+std::string Describe(const ColorBlock& b) {
+  return std::to_string(b.start) + "+" + std::to_string(b.length) + " " + std::to_string(b.bits) + "b (" +
+         std::to_string(b.ends.a.r) + "," + std::to_string(b.ends.a.g) + "," + std::to_string(b.ends.a.b) + ")-(" +
+         std::to_string(b.ends.b.r) + "," + std::to_string(b.ends.b.g) + "," + std::to_string(b.ends.b.b) + ")";
+}
+
+void ExpectSameBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
+  const auto cpu = BlocksOn("cpu", colors, layout, max_mse);
+  const auto vulkan = BlocksOn("vulkan", colors, layout, max_mse);
+  for (size_t k = 0; k < std::min(cpu.size(), vulkan.size()); ++k) ASSERT_EQ(Describe(cpu[k]), Describe(vulkan[k])) << "block " << k;
+  ASSERT_EQ(cpu.size(), vulkan.size());
+}
+
+TEST(ColorBlocksKernel, SameBlocksAsTheCpuOnRandomColors) {
+  std::mt19937 rng(7);
+  for (uint32_t n : {2u, 5u, 17u, 64u, 200u, 1000u, 4000u, 16383u}) {
+    std::vector<Rgb8> colors(n);
+    for (Rgb8& c : colors) c = {uint8_t(rng()), uint8_t(rng()), uint8_t(rng())};
+    for (const double max_mse : {0.0, 50.0, 400.0, 3000.0}) {
+      SCOPED_TRACE("n " + std::to_string(n) + " max_mse " + std::to_string(max_mse));
+      ExpectSameBlocks(colors, BlockLayout::kFixedRate, max_mse);
+      ExpectSameBlocks(colors, BlockLayout::kVariableRate, max_mse);
+      if (HasFatalFailure()) return;
+    }
   }
 }
 

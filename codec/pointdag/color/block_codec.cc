@@ -11,6 +11,7 @@
 
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
+#include "pointdag/gpu/color_blocks.h"
 
 namespace pointdag {
 namespace {
@@ -135,12 +136,28 @@ struct BlockModels {
 constexpr int kLengthBits = std::bit_width(kMacroBlockColors);
 constexpr int kDifferenceBits = 9;  // zigzag of -255..255, plus one
 
+// The same blocks from the Vulkan kernel (gpu/shaders/block_encode.comp).
+StatusOr<std::vector<ColorBlock>> EncodeBlocksOnDevice(gpu::VulkanContext& device, std::span<const Rgb8> colors,
+                                                       BlockLayout layout, Threshold threshold) {
+  static_assert(sizeof(Rgb8) == 3);
+  const std::span<const uint8_t> rgb(reinterpret_cast<const uint8_t*>(colors.data()), colors.size() * 3);
+  ASSIGN_OR_RETURN(const auto on_device, gpu::EncodeColorBlocks(device, rgb, layout == BlockLayout::kFixedRate, threshold.scaled));
+  std::vector<ColorBlock> blocks;
+  blocks.reserve(on_device.size());
+  for (const gpu::DeviceColorBlock& b : on_device) {
+    blocks.push_back({b.start, b.length, b.bits, {{b.a[0], b.a[1], b.a[2]}, {b.b[0], b.b[1], b.b[2]}}});
+  }
+  return blocks;
+}
+
 }  // namespace
 
-std::vector<ColorBlock> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
+StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
+  const Threshold threshold(max_mse);
+  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, gpu::DeviceFor(gpu::Stage::kColorBlocks));
+  if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
   // Macro blocks are independent: encode them in parallel, concatenate in order.
   const size_t macros = (colors.size() + kMacroBlockColors - 1) / kMacroBlockColors;
-  const Threshold threshold(max_mse);
   std::vector<std::vector<ColorBlock>> per_macro(macros);
   tbb::parallel_for(size_t{0}, macros, [&](size_t m) {
     const uint32_t begin = static_cast<uint32_t>(m * kMacroBlockColors);

@@ -41,7 +41,9 @@ enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
 
 // `max_mse` bounds each block's mean squared error per channel (0 keeps every color exact where the
 // model allows). Blocks come out sorted, covering every color once, never across macro blocks.
-std::vector<ColorBlock> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);
+// Runs on Vulkan where gpu::DeviceFor(kColorBlocks) says so, with the same result; an error only
+// from there (POINTDAG_DEVICE unknown, or `vulkan` without a device, or the device failing).
+StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);
 
 // The stored form: block table and weights, range-coded with adaptive models
 // (layout: proto/PDAG_FORMAT.md §3).

@@ -46,7 +46,7 @@ StatusOr<std::vector<Rgb8>> DecodeLossless(std::span<const uint8_t> payload, uin
 
 StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, ColorCodec codec, double max_mse) {
   const BlockLayout layout = codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
-  const auto blocks = EncodeBlocks(colors, layout, max_mse);
+  ASSIGN_OR_RETURN(const std::vector<ColorBlock> blocks, EncodeBlocks(colors, layout, max_mse));
   ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, layout));
   ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream, colors.size()));
   EncodedColors out;

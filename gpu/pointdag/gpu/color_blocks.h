@@ -1,7 +1,7 @@
-// Stage 5b on Vulkan: the block color encoder of codec/pointdag/color/block_codec.h, one workgroup
-// per 16K-color macro block (gpu/shaders/block_encode.comp). It is to return exactly the blocks the
-// CPU encoder returns for the same colors and threshold; on lavapipe that holds for uniform colors
-// only so far, which is why EncodeBlocks() does not call it yet.
+// Stage 5b on Vulkan: the block color encoder of codec/pointdag/color/block_codec.h as a sequence of
+// small kernels (gpu/shaders/block_*.comp): prefix sums per macro block, every candidate merge fitted
+// by its own invocation, each merge pass and each level of IIB's cut walked per macro block. It
+// returns exactly the blocks the CPU encoder returns for the same colors and threshold (gpu_test).
 #pragma once
 
 #include <cstdint>

@@ -10,6 +10,9 @@
 namespace pointdag::gpu {
 namespace {
 
+// One Run: a descriptor set per dispatch, from a pool sized for this many.
+constexpr uint32_t kMaxDispatches = 64, kMaxBuffers = 16;
+
 std::string VkError(const std::string& what, VkResult result) { return what + " failed (VkResult " + std::to_string(result) + ")"; }
 
 // Discrete first, then integrated, virtual, and a CPU implementation last.
@@ -141,10 +144,10 @@ StatusOr<std::unique_ptr<VulkanContext>> VulkanContext::Create() {
   if (VkResult r = vkCreateCommandPool(impl->device, &pool_info, nullptr, &impl->pool); r != VK_SUCCESS) {
     return Internal(VkError("vkCreateCommandPool", r));
   }
-  const VkDescriptorPoolSize sizes{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 64};
+  const VkDescriptorPoolSize sizes{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kMaxDispatches * kMaxBuffers};
   VkDescriptorPoolCreateInfo dp{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dp.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-  dp.maxSets = 8;
+  dp.maxSets = kMaxDispatches;
   dp.poolSizeCount = 1;
   dp.pPoolSizes = &sizes;
   if (VkResult r = vkCreateDescriptorPool(impl->device, &dp, nullptr, &impl->descriptors); r != VK_SUCCESS) {
@@ -242,23 +245,33 @@ StatusOr<const Kernel*> VulkanContext::GetKernel(std::string_view name, std::spa
   return &impl_->kernels.emplace(std::string(name), k).first->second;
 }
 
-Status VulkanContext::Run(const Kernel& kernel, std::span<const Buffer* const> buffers, const void* push, uint32_t groups) {
-  if (buffers.size() != kernel.buffers) return Internal("kernel takes " + std::to_string(kernel.buffers) + " buffers");
+Status VulkanContext::Run(std::span<const Dispatch> dispatches) {
+  if (dispatches.size() > kMaxDispatches) return Internal("more than " + std::to_string(kMaxDispatches) + " dispatches in one submission");
+  for (const Dispatch& d : dispatches) {
+    if (d.buffers.size() != d.kernel->buffers || d.buffers.size() > kMaxBuffers) {
+      return Internal("kernel takes " + std::to_string(d.kernel->buffers) + " buffers");
+    }
+    if (d.kernel->push_bytes > sizeof(d.push)) return Internal("kernel push constants are larger than a Dispatch holds");
+  }
   std::lock_guard lock(mutex_);
   VkDevice device = impl_->device;
-  const auto set_layout = reinterpret_cast<VkDescriptorSetLayout>(kernel.set_layout);
+  std::vector<VkDescriptorSet> sets(dispatches.size());
+  std::vector<VkDescriptorSetLayout> set_layouts;
+  for (const Dispatch& d : dispatches) set_layouts.push_back(reinterpret_cast<VkDescriptorSetLayout>(d.kernel->set_layout));
   VkDescriptorSetAllocateInfo set_alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   set_alloc.descriptorPool = impl_->descriptors;
-  set_alloc.descriptorSetCount = 1;
-  set_alloc.pSetLayouts = &set_layout;
-  VkDescriptorSet set;
-  if (VkResult r = vkAllocateDescriptorSets(device, &set_alloc, &set); r != VK_SUCCESS) return Internal(VkError("vkAllocateDescriptorSets", r));
-  std::vector<VkDescriptorBufferInfo> infos(buffers.size());
-  std::vector<VkWriteDescriptorSet> writes(buffers.size());
-  for (size_t i = 0; i < buffers.size(); ++i) {
-    infos[i] = {reinterpret_cast<VkBuffer>(buffers[i]->buffer_), 0, VK_WHOLE_SIZE};
-    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, set, static_cast<uint32_t>(i), 0, 1,
-                 VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, &infos[i], nullptr};
+  set_alloc.descriptorSetCount = static_cast<uint32_t>(sets.size());
+  set_alloc.pSetLayouts = set_layouts.data();
+  if (VkResult r = vkAllocateDescriptorSets(device, &set_alloc, sets.data()); r != VK_SUCCESS) return Internal(VkError("vkAllocateDescriptorSets", r));
+  std::vector<VkDescriptorBufferInfo> infos;
+  infos.reserve(dispatches.size() * kMaxBuffers);  // no reallocation: writes point into it
+  std::vector<VkWriteDescriptorSet> writes;
+  for (size_t k = 0; k < dispatches.size(); ++k) {
+    for (size_t i = 0; i < dispatches[k].buffers.size(); ++i) {
+      infos.push_back({reinterpret_cast<VkBuffer>(dispatches[k].buffers[i]->buffer_), 0, VK_WHOLE_SIZE});
+      writes.push_back({VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, sets[k], static_cast<uint32_t>(i), 0, 1,
+                        VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, &infos.back(), nullptr});
+    }
   }
   vkUpdateDescriptorSets(device, static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
 
@@ -271,13 +284,20 @@ Status VulkanContext::Run(const Kernel& kernel, std::span<const Buffer* const> b
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   vkBeginCommandBuffer(cb, &begin);
-  vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, reinterpret_cast<VkPipeline>(kernel.pipeline));
-  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, reinterpret_cast<VkPipelineLayout>(kernel.layout), 0, 1, &set, 0, nullptr);
-  if (kernel.push_bytes) {
-    vkCmdPushConstants(cb, reinterpret_cast<VkPipelineLayout>(kernel.layout), VK_SHADER_STAGE_COMPUTE_BIT, 0, kernel.push_bytes, push);
+  for (size_t k = 0; k < dispatches.size(); ++k) {
+    const Dispatch& d = dispatches[k];
+    const auto layout = reinterpret_cast<VkPipelineLayout>(d.kernel->layout);
+    if (k > 0) {  // each dispatch reads what the previous ones wrote
+      VkMemoryBarrier between{VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
+                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT};
+      vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &between, 0, nullptr, 0, nullptr);
+    }
+    vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, reinterpret_cast<VkPipeline>(d.kernel->pipeline));
+    vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &sets[k], 0, nullptr);
+    if (d.kernel->push_bytes) vkCmdPushConstants(cb, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, d.kernel->push_bytes, d.push.data());
+    vkCmdDispatch(cb, d.groups_x, d.groups_y, 1);
   }
-  vkCmdDispatch(cb, groups, 1, 1);
-  // Make the shader's writes visible to the host's reads of the mapped memory.
+  // Make the shaders' writes visible to the host's reads of the mapped memory.
   VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_HOST_READ_BIT};
   vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
   vkEndCommandBuffer(cb);
@@ -292,7 +312,7 @@ Status VulkanContext::Run(const Kernel& kernel, std::span<const Buffer* const> b
   if (r == VK_SUCCESS) r = vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX);
   vkDestroyFence(device, fence, nullptr);
   vkFreeCommandBuffers(device, impl_->pool, 1, &cb);
-  vkFreeDescriptorSets(device, impl_->descriptors, 1, &set);
+  vkFreeDescriptorSets(device, impl_->descriptors, static_cast<uint32_t>(sets.size()), sets.data());
   if (r != VK_SUCCESS) return Internal(VkError("the compute dispatch", r));
   return Status::Ok();
 }

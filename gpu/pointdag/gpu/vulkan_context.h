@@ -7,6 +7,7 @@
 // Vulkan cannot be opened under `auto`, the program says so once (stderr) and runs on the CPU.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -53,6 +54,15 @@ struct Kernel {
   uint32_t buffers = 0, push_bytes = 0;
 };
 
+// One dispatch of a kernel: its buffers (bindings 0..n-1), push constants, workgroups in x and y.
+struct Dispatch {
+  static constexpr size_t kMaxPushWords = 8;
+  const Kernel* kernel = nullptr;
+  std::span<const Buffer* const> buffers;
+  std::array<uint32_t, kMaxPushWords> push{};
+  uint32_t groups_x = 1, groups_y = 1;
+};
+
 class VulkanContext {
  public:
   // The best device there is, or why there is none.
@@ -66,8 +76,9 @@ class VulkanContext {
 
   StatusOr<Buffer> CreateBuffer(size_t bytes);
   StatusOr<const Kernel*> GetKernel(std::string_view name, std::span<const uint32_t> spirv, uint32_t buffers, uint32_t push_bytes);
-  // Records one dispatch of `groups` workgroups, submits it and waits for it.
-  Status Run(const Kernel& kernel, std::span<const Buffer* const> buffers, const void* push, uint32_t groups);
+  // Records the dispatches in order, each seeing the writes of those before it, submits them as one
+  // command buffer and waits for them.
+  Status Run(std::span<const Dispatch> dispatches);
 
  private:
   friend class Buffer;

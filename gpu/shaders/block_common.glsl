@@ -1,0 +1,172 @@
+// Shared by the block encoder kernels (block_*.comp): their buffers, parameters, and the block fit.
+// The same integer steps in the same order as codec/pointdag/color/block_fit.cc (BlockFitter::Fit,
+// FitWeights) and block_codec.cc (MergePasses, VariableRateMacroBlock), so that the blocks, and the
+// .pdag bytes, come out identical: change one, change the other (gpu_test compares them).
+//
+// Every invocation stays far below 65535 loop iterations in all: Mesa's llvmpipe (lavapipe) stops
+// any loop once a shader invocation has run that many (LP_MAX_TGSI_LOOP_ITERATIONS), silently. So a
+// macro block is not encoded by one invocation: fits run one per invocation, and the per-macro-block
+// steps (prefix sums, one merge pass, one level of the cut) walk at most 2 x 16384 entries.
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+layout(push_constant) uniform Params {
+  uint count;         // colors in all
+  uint macros;        // macro blocks
+  uint level;         // level of the block tree (0..4) a kernel works on
+  uint bits;          // bits per weight of the fits
+  uint threshold_lo;  // Threshold::scaled, low and high words
+  uint threshold_hi;
+  uint fixed_rate;    // 1: IIA, 3 bits everywhere, one level; 0: IIB variable rate
+  uint slot;          // merge pass within a submission (block_merge counts merges per slot)
+} params;
+
+const uint kMacro = 16384u;
+const uint kLevels = 5u;  // 0..4 bits per weight
+const uint kKeep = 1u << 24, kOpen = 1u << 25;
+
+layout(std430, binding = 0) readonly buffer Colors { uint colors[]; };  // r | g << 8 | b << 16
+layout(std430, binding = 1) buffer Prefix { uint prefix[]; };           // per macro: (kMacro + 1) x 9 sums
+// Candidates, per macro and level, kMacro each: x start, y length | failed_with << 16,
+// z endpoint A | kKeep | kOpen, w endpoint B.
+layout(std430, binding = 2) buffer Levels { uvec4 cand[]; };
+// Per macro, kMacro each: during merging, x = 1 where candidate k merges with k + 1 (y, z its
+// endpoints); during the cut, at a block's start: x = 1 + level, y = its index at that level.
+layout(std430, binding = 3) buffer Pairs { uvec4 pair[]; };
+layout(std430, binding = 4) buffer Costs { uint cost[]; };   // parallel to cand
+layout(std430, binding = 5) buffer Counts { uint counts[]; };  // per macro and level
+layout(std430, binding = 6) buffer Blocks { uvec4 blocks[]; };  // per macro: kMacro, then its count at kMacro * macros + m
+layout(std430, binding = 7) buffer Merges { uint merges[]; };   // per slot: macro blocks that merged something
+
+uint MacroColors(uint m) { return min(kMacro, params.count - m * kMacro); }
+uint CandAt(uint m, uint level, uint k) { return (m * kLevels + level) * kMacro + k; }
+uint CountAt(uint m, uint level) { return m * kLevels + level; }
+uint Length(uvec4 c) { return c.y & 0xFFFFu; }
+uint FailedWith(uvec4 c) { return c.y >> 16; }
+
+int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+int64_t RoundDiv(int64_t a, int64_t b) { return FloorDiv(2 * a + b, 2 * b); }
+uint Clamp255(int64_t v) { return v < 0 ? 0u : (v > 255 ? 255u : uint(v)); }
+int64_t Abs64(int64_t v) { return v < 0 ? -v : v; }
+int BitWidth(uint64_t x) {
+  const uint hi = uint(x >> 32);
+  return hi != 0u ? findMSB(hi) + 33 : findMSB(uint(x)) + 1;
+}
+ivec3 Unpack(uint c) { return ivec3(int(c & 255u), int((c >> 8) & 255u), int((c >> 16) & 255u)); }
+uint Pack(uint r, uint g, uint b) { return r | (g << 8) | (b << 16); }
+
+uint64_t MaxSse(uint length) {
+  const uint64_t scaled = uint64_t(params.threshold_lo) | (uint64_t(params.threshold_hi) << 32);
+  return uint64_t(length) * scaled / 1024ul;
+}
+
+uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 4u; }
+
+void Shrink(inout i64vec3 v) {
+  const int64_t largest = max(max(Abs64(v.x), Abs64(v.y)), Abs64(v.z));
+  const int shift = max(0, BitWidth(uint64_t(largest)) - 10);
+  v = v >> shift;
+}
+
+uint WeightOf(ivec3 c, ivec3 a, ivec3 d, int len2, int m) {
+  const int dot_ = (c.x - a.x) * d.x + (c.y - a.y) * d.y + (c.z - a.z) * d.z;
+  if (dot_ <= 0) return 0u;
+  if (dot_ >= len2) return uint(m);
+  return uint((2 * m * dot_ + len2) / (2 * len2));
+}
+
+uint ErrorOf(ivec3 c, ivec3 a, ivec3 b, uint w, uint m) {
+  const uvec3 r = (uvec3(a) * (m - w) + uvec3(b) * w + m / 2u) / m;
+  const ivec3 e = c - ivec3(r);
+  return uint(e.x * e.x + e.y * e.y + e.z * e.z);
+}
+
+struct Fit {
+  uint a, b;
+  uint64_t sse;
+};
+
+// BlockFitter::Fit and FitWeights for colors [begin, begin + length) of macro block m. Written with
+// vector components, not indexed arrays: lavapipe (Mesa 22.3) miscompiles dynamically indexed
+// private arrays. At most 3 x length + 8 loop iterations.
+Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) {
+  const int64_t n = int64_t(length);
+  const uint base = m * (kMacro + 1u) * 9u;
+  const uint lo_at = base + begin * 9u, hi_at = base + (begin + length) * 9u;
+  const i64vec3 s = i64vec3(int64_t(prefix[hi_at]) - int64_t(prefix[lo_at]), int64_t(prefix[hi_at + 1u]) - int64_t(prefix[lo_at + 1u]),
+                            int64_t(prefix[hi_at + 2u]) - int64_t(prefix[lo_at + 2u]));
+  // Squares rr gg bb and products rg rb gb.
+  const i64vec3 sq = i64vec3(int64_t(prefix[hi_at + 3u]) - int64_t(prefix[lo_at + 3u]), int64_t(prefix[hi_at + 4u]) - int64_t(prefix[lo_at + 4u]),
+                             int64_t(prefix[hi_at + 5u]) - int64_t(prefix[lo_at + 5u]));
+  const i64vec3 pr = i64vec3(int64_t(prefix[hi_at + 6u]) - int64_t(prefix[lo_at + 6u]), int64_t(prefix[hi_at + 7u]) - int64_t(prefix[lo_at + 7u]),
+                             int64_t(prefix[hi_at + 8u]) - int64_t(prefix[lo_at + 8u]));
+  // Covariance scaled by n^2, by columns (symmetric).
+  const i64vec3 c0 = i64vec3(n * sq.x - s.x * s.x, n * pr.x - s.y * s.x, n * pr.y - s.z * s.x);
+  const i64vec3 c1 = i64vec3(n * pr.x - s.x * s.y, n * sq.y - s.y * s.y, n * pr.z - s.z * s.y);
+  const i64vec3 c2 = i64vec3(n * pr.y - s.x * s.z, n * pr.z - s.y * s.z, n * sq.z - s.z * s.z);
+  const int widest = c0.x >= c1.y ? (c0.x >= c2.z ? 0 : 2) : (c1.y >= c2.z ? 1 : 2);
+  const int64_t widest_var = widest == 0 ? c0.x : (widest == 1 ? c1.y : c2.z);
+  if (bits == 0 || widest_var == 0) {
+    const i64vec3 a = i64vec3(RoundDiv(s.x, n), RoundDiv(s.y, n), RoundDiv(s.z, n));
+    const i64vec3 e = sq - 2 * a * s + n * a * a;
+    const uint c = Pack(Clamp255(a.x), Clamp255(a.y), Clamp255(a.z));
+    return Fit(c, c, uint64_t(e.x) + uint64_t(e.y) + uint64_t(e.z));
+  }
+  i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
+  Shrink(axis);
+  for (int iter = 0; iter < 8; ++iter) {
+    // cov * axis, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
+    i64vec3 next = i64vec3(c0.x * axis.x + c0.y * axis.y + c0.z * axis.z, c1.x * axis.x + c1.y * axis.y + c1.z * axis.z,
+                          c2.x * axis.x + c2.y * axis.y + c2.z * axis.z);
+    if (next.x == 0 && next.y == 0 && next.z == 0) break;
+    Shrink(next);
+    axis = next;
+  }
+  const uint first = m * kMacro + begin;
+  int64_t lo = 0, hi = 0;
+  for (uint i = 0; i < length; ++i) {
+    const i64vec3 d = n * i64vec3(Unpack(colors[first + i])) - s;
+    const int64_t t = d.x * axis.x + d.y * axis.y + d.z * axis.z;
+    lo = min(lo, t);
+    hi = max(hi, t);
+  }
+  const int64_t axis2 = axis.x * axis.x + axis.y * axis.y + axis.z * axis.z;
+  const int64_t den = n * axis2;
+  Fit best = Fit(Pack(Clamp255(RoundDiv(s.x * axis2 + lo * axis.x, den)), Clamp255(RoundDiv(s.y * axis2 + lo * axis.y, den)),
+                      Clamp255(RoundDiv(s.z * axis2 + lo * axis.z, den))),
+                 Pack(Clamp255(RoundDiv(s.x * axis2 + hi * axis.x, den)), Clamp255(RoundDiv(s.y * axis2 + hi * axis.y, den)),
+                      Clamp255(RoundDiv(s.z * axis2 + hi * axis.z, den))),
+                 0ul);
+
+  const int mx = (1 << bits) - 1;
+  const ivec3 a = Unpack(best.a), b = Unpack(best.b), d = b - a;
+  const int len2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  int64_t s00 = 0, s01 = 0, s11 = 0;
+  i64vec3 r0 = i64vec3(0), r1 = i64vec3(0);
+  for (uint i = 0; i < length; ++i) {
+    const ivec3 c = Unpack(colors[first + i]);
+    const uint w = WeightOf(c, a, d, len2, mx);
+    best.sse += uint64_t(ErrorOf(c, a, b, w, uint(mx)));
+    const int64_t u = int64_t(mx) - int64_t(w), t = int64_t(w);
+    s00 += u * u;
+    s01 += u * t;
+    s11 += t * t;
+    r0 += u * i64vec3(c);
+    r1 += t * i64vec3(c);
+  }
+  const int64_t det = s00 * s11 - s01 * s01;
+  if (det <= 0 || best.sse == 0) return best;
+  const i64vec3 na = int64_t(mx) * (s11 * r0 - s01 * r1), nb = int64_t(mx) * (s00 * r1 - s01 * r0);
+  const uint refined_a = Pack(Clamp255(RoundDiv(na.x, det)), Clamp255(RoundDiv(na.y, det)), Clamp255(RoundDiv(na.z, det)));
+  const uint refined_b = Pack(Clamp255(RoundDiv(nb.x, det)), Clamp255(RoundDiv(nb.y, det)), Clamp255(RoundDiv(nb.z, det)));
+  if (refined_a == best.a && refined_b == best.b) return best;
+  const ivec3 a2 = Unpack(refined_a), b2 = Unpack(refined_b), d2 = b2 - a2;
+  const int len2b = d2.x * d2.x + d2.y * d2.y + d2.z * d2.z;
+  const uint64_t stop = min(best.sse, give_up_above);
+  uint64_t sse = 0;
+  for (uint i = 0; i < length && sse <= stop; ++i) {
+    const ivec3 c = Unpack(colors[first + i]);
+    sse += uint64_t(ErrorOf(c, a2, b2, WeightOf(c, a2, d2, len2b, mx), uint(mx)));
+  }
+  if (sse < best.sse) best = Fit(refined_a, refined_b, sse);
+  return best;
+}

@@ -1,0 +1,21 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Block encoder, first half of a merge pass: whether each block of a level merges with its right
+// neighbour within the threshold, one invocation per block. A pair that failed before and has not
+// changed since is not fitted again (MergePasses' failed_with).
+#include "block_common.glsl"
+layout(local_size_x = 64) in;
+
+void main() {
+  const uint m = gl_WorkGroupID.y, k = gl_GlobalInvocationID.x, level = params.level;
+  if (k + 1u >= counts[CountAt(m, level)]) return;
+  const uvec4 here = cand[CandAt(m, level, k)], next = cand[CandAt(m, level, k + 1u)];
+  uvec4 result = uvec4(0u);
+  if (FailedWith(here) != Length(next)) {
+    const uint length = Length(here) + Length(next);
+    const uint64_t limit = MaxSse(length);
+    const Fit f = FitBlock(m, here.x, length, int(params.bits), limit);
+    if (f.sse <= limit) result = uvec4(1u, f.a, f.b, 0u);
+  }
+  pair[m * kMacro + k] = result;
+}
