@@ -6,6 +6,8 @@
 #include <fstream>
 
 #include "config.h"
+#include "pointdag/gpu/stage_device.h"
+#include "pointdag/pipeline.h"
 #include "http_server.h"
 #include "jobs.h"
 #include "service.h"
@@ -57,7 +59,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pointdagd: %s\n", store.status().ToString().c_str());
     return 1;
   }
+  // Where the heavy stages run (POINTDAG_DEVICE; under auto, the faster path measured now).
+  if (const Status s = ChooseStageDevices(); !s.ok()) {
+    std::fprintf(stderr, "pointdagd: %s\n", s.ToString().c_str());
+    return 2;
+  }
+  spdlog::info("stages: {}", gpu::DescribeDevices());
   Metrics metrics;
+  std::vector<Metrics::StageDevice> stages;
+  for (const gpu::StageChoice& c : gpu::StageChoices()) {
+    stages.push_back({gpu::StageName(c.stage), c.vulkan ? c.device : "cpu", c.timing.cpu_seconds, c.timing.vulkan_seconds});
+  }
+  metrics.SetStageDevices(std::move(stages));
   JobLimits limits;
   limits.workers = config.workers;
   limits.capacity = config.queue_size;

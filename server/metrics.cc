@@ -5,6 +5,16 @@
 namespace pointdag::server {
 namespace {
 constexpr const char* kBucketLabels[] = {"0.0005", "0.001", "0.0025", "0.005", "0.01", "0.025", "0.05", "0.1", "0.25", "0.5", "1", "5"};
+
+// A label value in the text exposition: backslash, double quote and newline escaped.
+std::string LabelValue(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\\' || c == '"') out += '\\';
+    out += c == '\n' ? std::string("\\n") : std::string(1, c);
+  }
+  return out;
+}
 }  // namespace
 
 void Metrics::CountRequest(const std::string& route, int status, double seconds, uint64_t body_bytes) {
@@ -23,6 +33,11 @@ void Metrics::CountIngest(uint64_t points, double seconds) {
   ingest_points_ += points;
   ingest_seconds_ += seconds;
   if (seconds > 0) last_ingest_points_per_s_ = static_cast<double>(points) / seconds;
+}
+
+void Metrics::SetStageDevices(std::vector<StageDevice> stages) {
+  std::lock_guard lock(mutex_);
+  stages_ = std::move(stages);
 }
 
 std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state) const {
@@ -57,7 +72,17 @@ std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state
       << "pointdag_ingest_seconds_total " << ingest_seconds_ << "\n"
       << "# HELP pointdag_ingest_points_per_second End-to-end throughput of the last finished ingest.\n"
       << "# TYPE pointdag_ingest_points_per_second gauge\n"
-      << "pointdag_ingest_points_per_second " << last_ingest_points_per_s_ << "\n";
+      << "pointdag_ingest_points_per_second " << last_ingest_points_per_s_ << "\n"
+      << "# HELP pointdag_stage_device Where each heavy stage runs (1 on the device named), decided at start.\n"
+      << "# TYPE pointdag_stage_device gauge\n";
+  for (const StageDevice& s : stages_) out << "pointdag_stage_device{stage=\"" << s.stage << "\",device=\"" << LabelValue(s.device) << "\"} 1\n";
+  out << "# HELP pointdag_stage_calibration_seconds Time of each path on the stage's calibration input at start.\n"
+      << "# TYPE pointdag_stage_calibration_seconds gauge\n";
+  for (const StageDevice& s : stages_) {
+    if (s.cpu_seconds <= 0) continue;
+    out << "pointdag_stage_calibration_seconds{stage=\"" << s.stage << "\",path=\"cpu\"} " << s.cpu_seconds << "\n"
+        << "pointdag_stage_calibration_seconds{stage=\"" << s.stage << "\",path=\"vulkan\"} " << s.vulkan_seconds << "\n";
+  }
   return out.str();
 }
 

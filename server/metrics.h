@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace pointdag::server {
 
@@ -15,6 +16,13 @@ class Metrics {
  public:
   void CountRequest(const std::string& route, int status, double seconds, uint64_t body_bytes);
   void CountIngest(uint64_t points, double seconds);
+  // Where each heavy stage runs, decided at start: stage -> device ("cpu" or a Vulkan device's name),
+  // with the calibration's seconds per path where it was measured.
+  struct StageDevice {
+    std::string stage, device;
+    double cpu_seconds = 0, vulkan_seconds = 0;
+  };
+  void SetStageDevices(std::vector<StageDevice> stages);
   std::string Render(const std::map<std::string, uint64_t>& jobs_by_state) const;
 
  private:
@@ -27,6 +35,7 @@ class Metrics {
   uint64_t ingest_points_ = 0;
   double ingest_seconds_ = 0;
   double last_ingest_points_per_s_ = 0;
+  std::vector<StageDevice> stages_;
 };
 
 }  // namespace pointdag::server

@@ -16,6 +16,7 @@
 
 #include "bench.h"
 #include "pointdag/compare/scorecard.h"
+#include "pointdag/gpu/stage_device.h"
 #include "client.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
@@ -280,6 +281,13 @@ int Main(int argc, char** argv) {
   for (auto* cmd : {encode, compare}) {
     if (cmd->parsed() && !grid.voxel && !grid.depth) {
       std::cerr << "pointdag " << cmd->get_name() << ": give --voxel SIZE or --depth D\n";
+      return 2;
+    }
+  }
+  if (encode->parsed() || compare->parsed() || bench->parsed()) {
+    // A bad POINTDAG_DEVICE, or `vulkan` without a device, is the caller's to fix: say so first.
+    if (const auto device = gpu::ProcessDevice(); !device.ok()) {
+      std::cerr << "pointdag " << app.get_subcommands().front()->get_name() << ": " << device.status().message() << "\n";
       return 2;
     }
   }

@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "pointdag/color/block_codec.h"
 #include "pointdag/color/mip_colors.h"
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/voxelize/morton.h"
@@ -118,6 +119,8 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
                  {"colors", color}}},
   };
 }
+
+Status ChooseStageDevices() { return ColorBlocksDevice().status(); }
 
 StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options) {
   EncodedScan out;

@@ -53,6 +53,11 @@ struct EncodedScan {
   StageSeconds seconds;
 };
 
+// Decides now where each stage with Vulkan kernels runs (gpu/pointdag/gpu/stage_device.h), as the
+// daemon does at start to log and export the choice; otherwise the first use decides. An error when
+// POINTDAG_DEVICE is unknown, or is `vulkan` and no device opens.
+Status ChooseStageDevices();
+
 StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options);
 
 // The stages after voxelizing, for a grid already in memory (a tile): DAG, stored form, colors.

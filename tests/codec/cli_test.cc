@@ -18,10 +18,10 @@ struct CliRun {
   std::string out, err;
 };
 
-// Runs the real `pointdag` binary; stderr is captured through a file.
-CliRun Cli(const std::string& args, const ScratchDir& dir) {
+// Runs the real `pointdag` binary, after `env` (VAR=value ...) when given; stderr is captured through a file.
+CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env = "") {
   const auto err_path = dir / "stderr.txt";
-  const std::string command = std::string(POINTDAG_CLI) + " " + args + " 2>" + err_path.string();
+  const std::string command = (env.empty() ? "" : "env " + env + " ") + POINTDAG_CLI + " " + args + " 2>" + err_path.string();
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;
   char buf[4096];
@@ -152,6 +152,38 @@ TEST(Cli, VoxelTooSmallIsBadInputWithAReason) {
                       dir);
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("2^21"), std::string::npos) << run.err;
+}
+
+// Issue #5's rules without a Vulkan driver (the loader pointed at none): `auto` says so once and
+// encodes on the CPU, the same bytes as POINTDAG_DEVICE=cpu; `vulkan` refuses with the reason.
+TEST(Cli, WithoutAVulkanDeviceAutoUsesTheCpuAndVulkanIsAClearError) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const auto scan = (DataDir() / "autzen_trim_pdrf3_rgb.las").string();
+  const std::string no_driver = "VK_ICD_FILENAMES=" + (dir / "none.json").string() + " VK_DRIVER_FILES=" + (dir / "none.json").string();
+  const std::string args = " --voxel 4 --quality 36";
+
+  const CliRun fallback = Cli("encode " + scan + " -o " + (dir / "auto.pdag").string() + args, dir, no_driver + " POINTDAG_DEVICE=auto");
+  ASSERT_EQ(fallback.exit_code, 0) << fallback.err;
+  const std::string notice = "no usable Vulkan device";
+  const size_t first = fallback.err.find(notice);
+  ASSERT_NE(first, std::string::npos) << fallback.err;
+  EXPECT_EQ(fallback.err.find(notice, first + 1), std::string::npos) << "said once: " << fallback.err;
+  EXPECT_NE(fallback.err.find("running on the CPU"), std::string::npos);
+
+  const CliRun cpu = Cli("encode " + scan + " -o " + (dir / "cpu.pdag").string() + args, dir, "POINTDAG_DEVICE=cpu");
+  ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+  EXPECT_EQ(cpu.err.find(notice), std::string::npos) << "cpu never opens Vulkan";
+  EXPECT_EQ(testing::ReadBytes(dir / "auto.pdag"), testing::ReadBytes(dir / "cpu.pdag"));
+
+  const CliRun required = Cli("encode " + scan + " -o " + (dir / "vulkan.pdag").string() + args, dir, no_driver + " POINTDAG_DEVICE=vulkan");
+  EXPECT_EQ(required.exit_code, 2);
+  EXPECT_NE(required.err.find("POINTDAG_DEVICE=vulkan but no Vulkan device could be used"), std::string::npos) << required.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "vulkan.pdag"));
+
+  const CliRun unknown = Cli("encode " + scan + " -o " + (dir / "x.pdag").string() + args, dir, "POINTDAG_DEVICE=gpu");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("POINTDAG_DEVICE must be auto, vulkan or cpu, not 'gpu'"), std::string::npos) << unknown.err;
 }
 
 }  // namespace

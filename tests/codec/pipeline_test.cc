@@ -11,17 +11,6 @@ using testing::DataDir;
 
 using testing::ScanAtVoxel;
 
-const ScanAtVoxel kScans[] = {
-    {"tiny_1.2-with-color_1065pts.las", 4.0},
-    {"autzen_trim_pdrf3_rgb.las", 4.0},
-    {"autzen_trim_las14_pdrf7_rgb.las", 2.0},
-    {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", 0.25},
-    {"lion_takanawa_pdrf7_rgb.las", 0.01},
-    {"lone_star_tls_noRGB.las", 0.05},
-    {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.002},
-    {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 0.004},
-};
-
 class PipelineTest : public ::testing::TestWithParam<ScanAtVoxel> {};
 
 // voxelize -> DAG -> stored form -> container bytes -> resident -> voxels: exactly the same.
@@ -67,7 +56,7 @@ TEST_P(PipelineTest, ChunkedBuildsEqualTheOneGoBuild) {
   EXPECT_EQ(SerializePdag(chunked->file), SerializePdag(whole->file));
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(kScans), testing::ScanFileName());
+INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(testing::kEveryScan), testing::ScanFileName());
 
 // Autzen at 4 ft, the fixed case of the metadata and size regression tests.
 StatusOr<EncodedScan> EncodeAutzenAt4Feet() {

@@ -142,6 +142,18 @@ struct ScanAtVoxel {
   double voxel;
 };
 
+// Every scan in ../shared/data, at a voxel size fine enough to keep most of its points.
+inline constexpr ScanAtVoxel kEveryScan[] = {
+    {"tiny_1.2-with-color_1065pts.las", 4.0},
+    {"autzen_trim_pdrf3_rgb.las", 4.0},
+    {"autzen_trim_las14_pdrf7_rgb.las", 2.0},
+    {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", 0.25},
+    {"lion_takanawa_pdrf7_rgb.las", 0.01},
+    {"lone_star_tls_noRGB.las", 0.05},
+    {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.002},
+    {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 0.004},
+};
+
 // gtest's name generator for parameters that are, or have a `file` member naming, a scan file:
 // "autzen_trim_pdrf3_rgb.las" -> "autzen_trim_pdrf3_rgb_las".
 struct ScanFileName {

@@ -5,7 +5,10 @@
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/gpu/color_blocks.h"
+#include "pointdag/gpu/stage_device.h"
 #include "pointdag/gpu/vulkan_context.h"
+#include "pointdag/pipeline.h"
+#include "../codec/test_util.h"
 
 namespace pointdag::gpu {
 namespace {
@@ -33,20 +36,30 @@ TEST(DeviceChoice, ParsesTheThreeWordsAndRefusesOthers) {
   EXPECT_NE(bad.status().message().find("auto, vulkan or cpu"), std::string::npos);
 }
 
+// A calibration that must not run, and ones that report fixed times.
+StatusOr<StageTiming> NotCalled(VulkanContext&) {
+  ADD_FAILURE() << "calibration ran";
+  return StageTiming{};
+}
+Calibration Measured(double cpu_seconds, double vulkan_seconds) {
+  return [=](VulkanContext&) -> StatusOr<StageTiming> { return StageTiming{cpu_seconds, vulkan_seconds}; };
+}
+
 TEST(DeviceChoice, CpuNeverOpensVulkanAndUnknownValuesAreErrors) {
   {
     DeviceEnv env("cpu");
     EXPECT_EQ(*ProcessDevice(), nullptr);
-    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks), nullptr);
-    EXPECT_EQ(DescribeDevices(), "color_blocks: cpu");
+    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, NotCalled), nullptr);
+    EXPECT_EQ(DescribeDevices(), "color_blocks: cpu (POINTDAG_DEVICE=cpu)");
   }
   DeviceEnv env("fastest");
   EXPECT_FALSE(ProcessDevice().ok());
+  EXPECT_EQ(DeviceFor(Stage::kColorBlocks, NotCalled).status().code(), StatusCode::kInvalidArgument);
 }
 
-// CI installs mesa-vulkan-drivers, so lavapipe is there at least: `vulkan` must open a device, and
-// `auto` keeps a CPU implementation off the stages (measured slower there).
-TEST(DeviceChoice, VulkanOpensADeviceAndAutoKeepsSoftwareOffTheStages) {
+// CI installs mesa-vulkan-drivers, so lavapipe is there at least: `vulkan` must open a device and
+// put the stages on it; `auto` keeps the faster path by the calibration's times, once per process.
+TEST(DeviceChoice, VulkanOpensADeviceAndAutoKeepsTheMeasuredFasterPath) {
   VulkanContext* vulkan = nullptr;
   {
     DeviceEnv env("vulkan");
@@ -55,11 +68,36 @@ TEST(DeviceChoice, VulkanOpensADeviceAndAutoKeepsSoftwareOffTheStages) {
     ASSERT_NE(*device, nullptr);
     vulkan = *device;
     EXPECT_FALSE(vulkan->device_name().empty());
-    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks), vulkan);
+    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, NotCalled), vulkan);
+    EXPECT_EQ(DescribeDevices(), "color_blocks: vulkan (" + vulkan->device_name() + ") (POINTDAG_DEVICE=vulkan)");
+  }
+  {
+    DeviceEnv env("auto");
+    EXPECT_EQ(*ProcessDevice(), vulkan);  // opened once per process
+    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.010, 0.020)), nullptr);
+    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.020, 0.010)), nullptr) << "decided once";
+    EXPECT_EQ(DescribeDevices(), "color_blocks: cpu (measured: cpu 10.0 ms, vulkan 20.0 ms on " + vulkan->device_name() + ")");
+  }
+  {
+    DeviceEnv env("auto");
+    EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.020, 0.010)), vulkan);
   }
   DeviceEnv env("auto");
-  EXPECT_EQ(*ProcessDevice(), vulkan);  // opened once per process
-  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks), vulkan->software() ? nullptr : vulkan);
+  const auto failing = [](VulkanContext&) -> StatusOr<StageTiming> { return Internal("lost the device"); };
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, failing), nullptr);
+  ASSERT_EQ(StageChoices().size(), 1u);
+  EXPECT_NE(StageChoices()[0].reason.find("lost the device"), std::string::npos);
+}
+
+// The codec's own calibration runs both paths for real and records what it measured.
+TEST(DeviceChoice, ColorBlocksCalibrationMeasuresBothPaths) {
+  DeviceEnv env("auto");
+  auto device = ColorBlocksDevice();
+  ASSERT_TRUE(device.ok()) << device.status().message();
+  const auto choices = StageChoices();
+  ASSERT_EQ(choices.size(), 1u);
+  EXPECT_EQ(choices[0].vulkan, *device != nullptr);
+  EXPECT_EQ(choices[0].reason.rfind("measured: cpu ", 0), 0u) << choices[0].reason;
 }
 
 TEST(ColorBlocksKernel, EqualColorsGiveOneZeroBitBlockPerMacroBlock) {
@@ -115,6 +153,35 @@ TEST(ColorBlocksKernel, SameBlocksAsTheCpuOnRandomColors) {
     }
   }
 }
+
+// The rule of issue #5: the Vulkan path writes the CPU path's .pdag bytes, on every scan, for
+// both block codecs and for mipmapped colors (which code DAG-order colors).
+class SameFileTest : public ::testing::TestWithParam<testing::ScanAtVoxel> {};
+
+TEST_P(SameFileTest, VulkanWritesTheCpuPathsBytes) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = GetParam().voxel;
+  const auto encode = [&](const char* device) {
+    DeviceEnv env(device);
+    auto scan = EncodeScan(testing::DataDir() / GetParam().file, options);
+    EXPECT_TRUE(scan.ok()) << device << ": " << scan.status().ToString();
+    return scan.ok() ? SerializePdag(scan->file) : std::vector<uint8_t>{};
+  };
+  for (const ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+    for (const bool mipmap : {false, true}) {
+      if (mipmap && codec == ColorCodec::kFixedRate) continue;
+      SCOPED_TRACE(std::string(ColorCodecName(codec)) + (mipmap ? " mipmap" : ""));
+      options.colors = {codec, std::nullopt};
+      options.mipmap = mipmap;
+      const auto cpu = encode("cpu");
+      ASSERT_FALSE(cpu.empty());
+      EXPECT_TRUE(cpu == encode("vulkan"));
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, SameFileTest, ::testing::ValuesIn(testing::kEveryScan), testing::ScanFileName());
 
 }  // namespace
 }  // namespace pointdag::gpu

@@ -130,6 +130,10 @@ TEST_F(ServerTest, HealthAndMetrics) {
   EXPECT_NE(metrics.body.find("pointdag_http_request_duration_seconds_bucket{route=\"/livez\",le=\"+Inf\"} 1"), std::string::npos);
   EXPECT_NE(metrics.body.find("pointdag_jobs{state=\"failed\"}"), std::string::npos);
   EXPECT_NE(metrics.body.find("pointdag_ingest_points_per_second"), std::string::npos);
+  // Where the color block encoder runs, decided at start and said in the log too.
+  EXPECT_NE(metrics.body.find("pointdag_stage_device{stage=\"color_blocks\",device=\""), std::string::npos) << metrics.body;
+  const auto log = testing::ReadBytes(dir_ / "daemon.log");
+  EXPECT_NE(std::string(log.begin(), log.end()).find("stages: color_blocks: "), std::string::npos);
 }
 
 TEST_F(ServerTest, ErrorPathsAnswerWithTheirStatusAndAJsonMessage) {
@@ -339,6 +343,20 @@ TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM tiles"), meta["tile_count"].get<int64_t>());
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 1);
   EXPECT_TRUE(std::filesystem::is_empty(scratch.path() / "var" / "uploads"));  // the upload is gone once used
+}
+
+// A POINTDAG_DEVICE the daemon cannot honour stops it at start with the reason (exit code 2).
+TEST(Daemon, RefusesToStartOnAnUnknownDevice) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pointdagd-device-" + std::to_string(getpid()));
+  const std::string command = std::string("env POINTDAG_DEVICE=gpu ") + POINTDAGD + " --listen 127.0.0.1:0 --data-dir " + dir.string() +
+                              " >" + (dir.string() + ".log") + " 2>&1";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const auto log = testing::ReadBytes(dir.string() + ".log");
+  EXPECT_NE(std::string(log.begin(), log.end()).find("POINTDAG_DEVICE must be auto, vulkan or cpu, not 'gpu'"), std::string::npos);
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove(dir.string() + ".log");
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
 #include "pointdag/color/block_codec.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <chrono>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -12,6 +14,7 @@
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
+#include "pointdag/gpu/stage_device.h"
 
 namespace pointdag {
 namespace {
@@ -136,26 +139,7 @@ struct BlockModels {
 constexpr int kLengthBits = std::bit_width(kMacroBlockColors);
 constexpr int kDifferenceBits = 9;  // zigzag of -255..255, plus one
 
-// The same blocks from the Vulkan kernel (gpu/shaders/block_encode.comp).
-StatusOr<std::vector<ColorBlock>> EncodeBlocksOnDevice(gpu::VulkanContext& device, std::span<const Rgb8> colors,
-                                                       BlockLayout layout, Threshold threshold) {
-  static_assert(sizeof(Rgb8) == 3);
-  const std::span<const uint8_t> rgb(reinterpret_cast<const uint8_t*>(colors.data()), colors.size() * 3);
-  ASSIGN_OR_RETURN(const auto on_device, gpu::EncodeColorBlocks(device, rgb, layout == BlockLayout::kFixedRate, threshold.scaled));
-  std::vector<ColorBlock> blocks;
-  blocks.reserve(on_device.size());
-  for (const gpu::DeviceColorBlock& b : on_device) {
-    blocks.push_back({b.start, b.length, b.bits, {{b.a[0], b.a[1], b.a[2]}, {b.b[0], b.b[1], b.b[2]}}});
-  }
-  return blocks;
-}
-
-}  // namespace
-
-StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
-  const Threshold threshold(max_mse);
-  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, gpu::DeviceFor(gpu::Stage::kColorBlocks));
-  if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
+std::vector<ColorBlock> EncodeBlocksOnCpu(std::span<const Rgb8> colors, BlockLayout layout, Threshold threshold) {
   // Macro blocks are independent: encode them in parallel, concatenate in order.
   const size_t macros = (colors.size() + kMacroBlockColors - 1) / kMacroBlockColors;
   std::vector<std::vector<ColorBlock>> per_macro(macros);
@@ -175,6 +159,57 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
   std::vector<ColorBlock> blocks;
   for (const auto& macro : per_macro) blocks.insert(blocks.end(), macro.begin(), macro.end());
   return blocks;
+}
+
+// The same blocks from the Vulkan kernels (gpu/shaders/block_*.comp).
+StatusOr<std::vector<ColorBlock>> EncodeBlocksOnDevice(gpu::VulkanContext& device, std::span<const Rgb8> colors,
+                                                       BlockLayout layout, Threshold threshold) {
+  static_assert(sizeof(Rgb8) == 3);
+  const std::span<const uint8_t> rgb(reinterpret_cast<const uint8_t*>(colors.data()), colors.size() * 3);
+  ASSIGN_OR_RETURN(const auto on_device, gpu::EncodeColorBlocks(device, rgb, layout == BlockLayout::kFixedRate, threshold.scaled));
+  std::vector<ColorBlock> blocks;
+  blocks.reserve(on_device.size());
+  for (const gpu::DeviceColorBlock& b : on_device) {
+    blocks.push_back({b.start, b.length, b.bits, {{b.a[0], b.a[1], b.a[2]}, {b.b[0], b.b[1], b.b[2]}}});
+  }
+  return blocks;
+}
+
+// Both paths on 4 macro blocks of a noisy gradient (the Vulkan one after a warm-up run).
+StatusOr<gpu::StageTiming> CalibrateColorBlocks(gpu::VulkanContext& device) {
+  std::vector<Rgb8> colors(4 * kMacroBlockColors);
+  uint32_t noise = 12345;
+  for (size_t i = 0; i < colors.size(); ++i) {
+    noise = noise * 1664525u + 1013904223u;
+    const auto channel = [&](double base, int shift) { return static_cast<uint8_t>(std::clamp(base + ((noise >> shift) & 7), 0.0, 255.0)); };
+    const double t = static_cast<double>(i % 4096) / 4096.0;
+    colors[i] = {channel(40 + 180 * t, 8), channel(200 - 150 * t, 16), channel(90 + 60 * t, 24)};
+  }
+  const Threshold threshold(16.0);
+  return tbb::this_task_arena::isolate([&]() -> StatusOr<gpu::StageTiming> {
+    using Clock = std::chrono::steady_clock;
+    const auto seconds = [](Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); };
+    gpu::StageTiming timing;
+    auto start = Clock::now();
+    EncodeBlocksOnCpu(colors, BlockLayout::kVariableRate, threshold);
+    timing.cpu_seconds = seconds(start);
+    RETURN_IF_ERROR(EncodeBlocksOnDevice(device, colors, BlockLayout::kVariableRate, threshold).status());
+    start = Clock::now();
+    RETURN_IF_ERROR(EncodeBlocksOnDevice(device, colors, BlockLayout::kVariableRate, threshold).status());
+    timing.vulkan_seconds = seconds(start);
+    return timing;
+  });
+}
+
+}  // namespace
+
+StatusOr<gpu::VulkanContext*> ColorBlocksDevice() { return gpu::DeviceFor(gpu::Stage::kColorBlocks, CalibrateColorBlocks); }
+
+StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
+  const Threshold threshold(max_mse);
+  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, ColorBlocksDevice());
+  if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
+  return EncodeBlocksOnCpu(colors, layout, threshold);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,

@@ -25,6 +25,10 @@
 #include "pointdag/color/block_fit.h"
 #include "pointdag/status.h"
 
+namespace pointdag::gpu {
+class VulkanContext;
+}
+
 namespace pointdag {
 
 constexpr uint32_t kMacroBlockColors = 16384;
@@ -41,9 +45,13 @@ enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
 
 // `max_mse` bounds each block's mean squared error per channel (0 keeps every color exact where the
 // model allows). Blocks come out sorted, covering every color once, never across macro blocks.
-// Runs on Vulkan where gpu::DeviceFor(kColorBlocks) says so, with the same result; an error only
-// from there (POINTDAG_DEVICE unknown, or `vulkan` without a device, or the device failing).
+// Runs on Vulkan where ColorBlocksDevice() says so, with the same result; an error only from there
+// (POINTDAG_DEVICE unknown, or `vulkan` without a device, or the device failing).
 StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);
+
+// Where EncodeBlocks runs in this process (null: the CPU), per gpu/pointdag/gpu/stage_device.h;
+// under POINTDAG_DEVICE=auto decided on the first call by timing both paths.
+StatusOr<gpu::VulkanContext*> ColorBlocksDevice();
 
 // The stored form: block table and weights, range-coded with adaptive models
 // (layout: proto/PDAG_FORMAT.md §3).

@@ -2,8 +2,6 @@
 
 #include <vulkan/vulkan.h>
 
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <map>
 
@@ -27,20 +25,6 @@ int DeviceRank(VkPhysicalDeviceType type) {
 }
 
 }  // namespace
-
-StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text) {
-  if (text == "auto" || text.empty()) return DeviceChoice::kAuto;
-  if (text == "vulkan") return DeviceChoice::kVulkan;
-  if (text == "cpu") return DeviceChoice::kCpu;
-  return InvalidArgument("POINTDAG_DEVICE must be auto, vulkan or cpu, not '" + std::string(text) + "'");
-}
-
-const char* StageName(Stage stage) {
-  switch (stage) {
-    case Stage::kColorBlocks: return "color_blocks";
-  }
-  return "?";
-}
 
 struct VulkanContext::Impl {
   VkInstance instance = VK_NULL_HANDLE;
@@ -315,82 +299,6 @@ Status VulkanContext::Run(std::span<const Dispatch> dispatches) {
   vkFreeDescriptorSets(device, impl_->descriptors, static_cast<uint32_t>(sets.size()), sets.data());
   if (r != VK_SUCCESS) return Internal(VkError("the compute dispatch", r));
   return Status::Ok();
-}
-
-namespace {
-
-struct ProcessState {
-  std::mutex mutex;
-  bool chosen = false;
-  DeviceChoice choice = DeviceChoice::kAuto;
-  Status error;                    // POINTDAG_DEVICE unknown, or vulkan required and not there
-  bool opened = false;             // Vulkan was tried (once per process)
-  std::unique_ptr<VulkanContext> context;
-  Status open_error;
-};
-
-ProcessState& State() {
-  // Never destroyed: a driver torn down by static destructors after its own can crash at exit.
-  static ProcessState* state = new ProcessState;
-  return *state;
-}
-
-}  // namespace
-
-StatusOr<VulkanContext*> ProcessDevice() {
-  ProcessState& s = State();
-  std::lock_guard lock(s.mutex);
-  if (!s.chosen) {
-    s.chosen = true;
-    s.error = Status::Ok();
-    const char* env = std::getenv("POINTDAG_DEVICE");
-    auto choice = ParseDeviceChoice(env ? env : "auto");
-    if (!choice.ok()) {
-      s.error = choice.status();
-    } else {
-      s.choice = *choice;
-    }
-    if (s.error.ok() && s.choice != DeviceChoice::kCpu && !s.opened) {
-      s.opened = true;
-      auto context = VulkanContext::Create();
-      if (context.ok()) {
-        s.context = std::move(*context);
-      } else {
-        s.open_error = context.status();
-        if (s.choice == DeviceChoice::kAuto) {
-          std::fprintf(stderr, "pointdag: no usable Vulkan device (%s); running on the CPU\n", s.open_error.message().c_str());
-        }
-      }
-    }
-    if (s.error.ok() && s.choice == DeviceChoice::kVulkan && !s.context) {
-      s.error = Status(StatusCode::kUnsupported, "POINTDAG_DEVICE=vulkan but no Vulkan device could be used: " + s.open_error.message());
-    }
-  }
-  if (!s.error.ok()) return s.error;
-  return s.choice == DeviceChoice::kCpu ? nullptr : s.context.get();
-}
-
-StatusOr<VulkanContext*> DeviceFor(Stage) {
-  ASSIGN_OR_RETURN(VulkanContext* context, ProcessDevice());
-  if (!context) return nullptr;
-  if (State().choice == DeviceChoice::kAuto && context->software()) return nullptr;
-  return context;
-}
-
-std::string DescribeDevices() {
-  std::string out;
-  for (Stage stage : {Stage::kColorBlocks}) {
-    auto device = DeviceFor(stage);
-    out += std::string(out.empty() ? "" : ", ") + StageName(stage) + ": " +
-           (!device.ok() ? "error (" + device.status().message() + ")" : *device ? "vulkan (" + (*device)->device_name() + ")" : "cpu");
-  }
-  return out;
-}
-
-void ResetProcessDeviceForTesting() {
-  ProcessState& s = State();
-  std::lock_guard lock(s.mutex);
-  s.chosen = false;
 }
 
 }  // namespace pointdag::gpu

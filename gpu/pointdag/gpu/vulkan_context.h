@@ -1,10 +1,5 @@
-// Vulkan compute: choosing a device, storage buffers, compute kernels from embedded SPIR-V.
-//
-// POINTDAG_DEVICE picks the path for the heavy stages: `cpu` never opens Vulkan; `vulkan` requires a
-// usable device and fails with a clear message otherwise; `auto` (the default) opens the best device
-// (a discrete GPU, then an integrated one, then a virtual one, then Mesa lavapipe on the CPU) and
-// then uses it for a stage where that stage is measured faster there (see StageUsesVulkan). When
-// Vulkan cannot be opened under `auto`, the program says so once (stderr) and runs on the CPU.
+// Vulkan compute: the device, host-visible storage buffers, compute kernels from embedded SPIR-V,
+// and submissions of dispatches. Which stage uses it is stage_device.h's business.
 #pragma once
 
 #include <array>
@@ -19,14 +14,6 @@
 #include "pointdag/status.h"
 
 namespace pointdag::gpu {
-
-enum class DeviceChoice { kAuto, kVulkan, kCpu };
-
-StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text);  // "auto" | "vulkan" | "cpu"
-
-// Stages with a Vulkan kernel.
-enum class Stage { kColorBlocks };
-const char* StageName(Stage stage);
 
 class VulkanContext;
 
@@ -89,19 +76,5 @@ class VulkanContext {
   bool software_ = false;
   std::mutex mutex_;  // one queue: submissions from tbb workers take turns
 };
-
-// The process's choice from POINTDAG_DEVICE, made once (thread-safe). Null: the CPU path.
-// An error only when POINTDAG_DEVICE=vulkan and no device opens, or the variable is unknown.
-StatusOr<VulkanContext*> ProcessDevice();
-
-// Whether `stage` runs on Vulkan in this process: always under POINTDAG_DEVICE=vulkan; under auto
-// only on a hardware GPU (on lavapipe each stage measured slower than the CPU path, docs/benchmarks.md).
-StatusOr<VulkanContext*> DeviceFor(Stage stage);
-
-// For logs and /metrics: "cpu" or "vulkan (<device name>)" per stage.
-std::string DescribeDevices();
-
-// Tests: forget the process's choice so the next call reads POINTDAG_DEVICE again.
-void ResetProcessDeviceForTesting();
 
 }  // namespace pointdag::gpu
