@@ -120,7 +120,10 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
   };
 }
 
-Status ChooseStageDevices() { return ColorBlocksDevice().status(); }
+Status ChooseStageDevices() {
+  RETURN_IF_ERROR(VoxelizeDevice().status());
+  return ColorBlocksDevice().status();
+}
 
 StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const EncodeOptions& options) {
   EncodedScan out;

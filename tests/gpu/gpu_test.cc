@@ -1,11 +1,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <map>
 #include <random>
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
+#include "pointdag/gpu/voxel_reduce.h"
 #include "pointdag/gpu/vulkan_context.h"
 #include "pointdag/pipeline.h"
 #include "../codec/test_util.h"
@@ -150,6 +152,46 @@ TEST(ColorBlocksKernel, SameBlocksAsTheCpuOnRandomColors) {
       ExpectSameBlocks(colors, BlockLayout::kFixedRate, max_mse);
       ExpectSameBlocks(colors, BlockLayout::kVariableRate, max_mse);
       if (HasFatalFailure()) return;
+    }
+  }
+}
+
+// Radix sort, unique and mean against a plain map: duplicates within and across tiles (one voxel
+// holds 70000 points over 18 tiles, its 16-bit sums past 2^32), codes using all 63 bits, 8- and
+// 16-bit colors (divisor 1 and 257).
+TEST(VoxelKernels, OneVoxelPerCodeWithTheMeanRoundedHalfUp) {
+  DeviceEnv env("vulkan");
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok()) << device.status().message();
+  std::mt19937_64 rng(11);
+  std::vector<uint64_t> keys;
+  std::vector<std::array<uint16_t, 3>> rgb;
+  for (int i = 0; i < 90000; ++i) {
+    keys.push_back(i < 70000 ? 12345 : (rng() >> 1) % (i < 80000 ? 500 : uint64_t{1} << 63));
+    rgb.push_back({uint16_t(i < 70000 ? 65535 : rng()), uint16_t(i < 70000 ? 65000 + i % 500 : rng()), uint16_t(rng())});
+  }
+  for (const uint32_t divisor : {1u, 257u}) {
+    std::map<uint64_t, std::array<uint64_t, 4>> expected;  // sums, points
+    for (size_t i = 0; i < keys.size(); ++i) {
+      auto& e = expected[keys[i]];
+      for (int c = 0; c < 3; ++c) e[c] += divisor == 1 ? rgb[i][c] & 255 : rgb[i][c];
+      ++e[3];
+    }
+    auto input = rgb;
+    if (divisor == 1) {
+      for (auto& c : input) c = {uint16_t(c[0] & 255), uint16_t(c[1] & 255), uint16_t(c[2] & 255)};
+    }
+    auto voxels = ReduceVoxels(**device, keys, input, 63, divisor);
+    ASSERT_TRUE(voxels.ok()) << voxels.status().message();
+    ASSERT_EQ(voxels->morton.size(), expected.size());
+    size_t v = 0;
+    for (const auto& [key, e] : expected) {
+      ASSERT_EQ(voxels->morton[v], key) << "voxel " << v;
+      for (int c = 0; c < 3; ++c) {
+        const uint64_t d = e[3] * divisor;
+        ASSERT_EQ(voxels->colors[v][c], std::min<uint64_t>((2 * e[c] + d) / (2 * d), 255)) << "voxel " << v << " channel " << c;
+      }
+      ++v;
     }
   }
 }

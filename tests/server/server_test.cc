@@ -130,10 +130,12 @@ TEST_F(ServerTest, HealthAndMetrics) {
   EXPECT_NE(metrics.body.find("pointdag_http_request_duration_seconds_bucket{route=\"/livez\",le=\"+Inf\"} 1"), std::string::npos);
   EXPECT_NE(metrics.body.find("pointdag_jobs{state=\"failed\"}"), std::string::npos);
   EXPECT_NE(metrics.body.find("pointdag_ingest_points_per_second"), std::string::npos);
-  // Where the color block encoder runs, decided at start and said in the log too.
+  // Where the stages with Vulkan kernels run, decided at start and said in the log too.
+  EXPECT_NE(metrics.body.find("pointdag_stage_device{stage=\"voxelize\",device=\""), std::string::npos) << metrics.body;
   EXPECT_NE(metrics.body.find("pointdag_stage_device{stage=\"color_blocks\",device=\""), std::string::npos) << metrics.body;
   const auto log = testing::ReadBytes(dir_ / "daemon.log");
-  EXPECT_NE(std::string(log.begin(), log.end()).find("stages: color_blocks: "), std::string::npos);
+  EXPECT_NE(std::string(log.begin(), log.end()).find("stages: voxelize: "), std::string::npos);
+  EXPECT_NE(std::string(log.begin(), log.end()).find("; color_blocks: "), std::string::npos);
 }
 
 TEST_F(ServerTest, ErrorPathsAnswerWithTheirStatusAndAJsonMessage) {

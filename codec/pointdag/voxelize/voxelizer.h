@@ -3,7 +3,7 @@
 // Contract: the grid's origin is the scan's exact minimum corner (found by a first pass, never from
 // a header) and its side is the largest extent. Given --voxel S, depth is the smallest in [2, 21]
 // whose grid covers the extent; given --depth D the voxel size is extent / 2^D. All points of one
-// voxel become one voxel whose color is the rounded mean of their colors, in 8 bits (16-bit sources
+// voxel become one voxel whose color is the mean of their colors rounded half up, in 8 bits (16-bit sources
 // are scaled, 8-bit values stored in 16-bit fields are kept). Voxels come out sorted by Morton code,
 // which is also the DAG's color order.
 //
@@ -21,6 +21,10 @@
 #include <vector>
 
 #include "pointdag/read/scan_reader.h"
+
+namespace pointdag::gpu {
+class VulkanContext;
+}
 
 namespace pointdag {
 
@@ -66,5 +70,9 @@ struct VoxelGrid {
 StatusOr<int> DepthForVoxelSize(double extent, double voxel_size);
 
 StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options);
+
+// Where the sort and reduction of points to voxels runs in this process (null: the CPU), per
+// gpu/pointdag/gpu/stage_device.h; under POINTDAG_DEVICE=auto decided on the first call by timing both.
+StatusOr<gpu::VulkanContext*> VoxelizeDevice();
 
 }  // namespace pointdag

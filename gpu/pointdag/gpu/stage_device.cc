@@ -72,6 +72,7 @@ StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text) {
 
 const char* StageName(Stage stage) {
   switch (stage) {
+    case Stage::kVoxelize: return "voxelize";
     case Stage::kColorBlocks: return "color_blocks";
   }
   return "?";
