@@ -20,6 +20,7 @@
 #include "pointdag/color/block_codec.h"
 #include "pointdag/compare/draco_compare.h"
 #include "pointdag/compare/scorecard.h"
+#include "pointdag/gpu/stage_device.h"
 #include "pointdag/ingest.h"
 #include "pointdag/pipeline.h"
 
@@ -290,10 +291,79 @@ int RunColorBench(const BenchOptions& options) {
   return 0;
 }
 
+// One scan with every stage on `device` (POINTDAG_DEVICE=cpu or vulkan), after a warm-up run that
+// builds the Vulkan pipelines: read+voxelize (the sort and reduction run on the device) and the VBR
+// block encoder at max MSE 16, best of 3.
+nlohmann::json RunDeviceCase(const std::filesystem::path& scan, double voxel, const char* device) {
+  setenv("POINTDAG_DEVICE", device, 1);
+  gpu::ResetProcessDevice();
+  if (const Status s = ChooseStageDevices(); !s.ok()) return {{"error", s.ToString()}};
+  EncodeOptions options;
+  options.voxel_size = voxel;
+  options.colors = {ColorCodec::kLossless, std::nullopt};
+  auto encoded = EncodeScan(scan, options);
+  if (!encoded.ok()) return {{"error", encoded.status().ToString()}};
+  using Clock = std::chrono::steady_clock;
+  double voxelize_s = 1e30, blocks_s = 1e30;
+  for (int repeat = 0; repeat < 3; ++repeat) {
+    auto again = EncodeScan(scan, options);
+    if (!again.ok()) return {{"error", again.status().ToString()}};
+    voxelize_s = std::min(voxelize_s, again->seconds.read_voxelize);
+    if (!encoded->grid.has_color()) continue;
+    const auto start = Clock::now();
+    if (auto blocks = EncodeBlocks(encoded->grid.colors, BlockLayout::kVariableRate, 16.0); !blocks.ok()) {
+      return {{"error", blocks.status().ToString()}};
+    }
+    blocks_s = std::min(blocks_s, std::chrono::duration<double>(Clock::now() - start).count());
+  }
+  auto vulkan = gpu::ProcessDevice();
+  return {{"scan", scan.filename().string()},
+          {"device", vulkan.ok() && *vulkan ? (*vulkan)->device_name() : "cpu"},
+          {"points", encoded->grid.points_in},
+          {"voxels", encoded->grid.morton.size()},
+          {"read_voxelize_s", voxelize_s},
+          {"color_blocks_s", encoded->grid.has_color() ? nlohmann::json(blocks_s) : nlohmann::json()}};
+}
+
+int RunDeviceBench(const BenchOptions& options) {
+  if (!options.json) {
+    std::printf("machine: %s; read+voxelize (sort and reduction on the path named) and the VBR block encoder (max MSE 16), best of 3\n",
+                MachineName().c_str());
+    std::printf("| scan | voxel | points | voxels | read+voxelize CPU Mpt/s | on Vulkan Mpt/s | VBR blocks CPU M colors/s | on Vulkan "
+                "M colors/s | Vulkan device |\n|---|---|---|---|---|---|---|---|---|\n");
+  }
+  for (const auto& scan : ScansIn(options.data_dir)) {
+    const auto it = kVoxelSizes.find(scan.filename().string());
+    if (it == kVoxelSizes.end()) continue;
+    const double voxel = it->second.first;
+    const nlohmann::json cpu = RunIsolated(scan.filename().string(), [&] { return RunDeviceCase(scan, voxel, "cpu"); });
+    const nlohmann::json vulkan = RunIsolated(scan.filename().string(), [&] { return RunDeviceCase(scan, voxel, "vulkan"); });
+    if (options.json) {
+      std::cout << nlohmann::json{{"cpu", cpu}, {"vulkan", vulkan}}.dump() << std::endl;
+      continue;
+    }
+    if (cpu.contains("error") || vulkan.contains("error")) {
+      std::printf("| %s | %g | error: %s |\n", scan.filename().c_str(), voxel, (cpu.contains("error") ? cpu : vulkan)["error"].dump().c_str());
+      continue;
+    }
+    const double points = cpu["points"].get<double>(), voxels = cpu["voxels"].get<double>();
+    const auto rate = [](const nlohmann::json& seconds, double n) {
+      return seconds.is_null() ? std::string("-") : std::to_string(n / seconds.get<double>() / 1e6).substr(0, 5);
+    };
+    std::printf("| %s | %g | %.0f | %.0f | %s | %s | %s | %s | %s |\n", scan.filename().c_str(), voxel, points, voxels,
+                rate(cpu["read_voxelize_s"], points).c_str(), rate(vulkan["read_voxelize_s"], points).c_str(),
+                rate(cpu["color_blocks_s"], voxels).c_str(), rate(vulkan["color_blocks_s"], voxels).c_str(),
+                vulkan["device"].get<std::string>().c_str());
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int RunBench(const BenchOptions& options) {
   if (options.colors) return RunColorBench(options);
+  if (options.devices) return RunDeviceBench(options);
   if (options.ingest) return RunIngestBench(options);
   const auto scans = ScansIn(options.data_dir);
   if (!options.json) {

@@ -270,6 +270,7 @@ int Main(int argc, char** argv) {
   bench->add_flag("--json", bench_options.json, "print JSON lines instead of a table");
   bench->add_flag("--colors", bench_options.colors, "color codecs: rate-distortion table and decoding speed");
   bench->add_flag("--ingest", bench_options.ingest, "the daemon's ingest pipeline per scan: stage times, points/s, peak RSS");
+  bench->add_flag("--devices", bench_options.devices, "each stage with Vulkan kernels on the CPU and on Vulkan: points/s");
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
 
   try {
@@ -284,10 +285,17 @@ int Main(int argc, char** argv) {
       return 2;
     }
   }
-  if (encode->parsed() || compare->parsed() || bench->parsed()) {
+  if (encode->parsed() || compare->parsed()) {
     // A bad POINTDAG_DEVICE, or `vulkan` without a device, is the caller's to fix: say so first.
     if (const auto device = gpu::ProcessDevice(); !device.ok()) {
       std::cerr << "pointdag " << app.get_subcommands().front()->get_name() << ": " << device.status().message() << "\n";
+      return 2;
+    }
+  }
+  if (bench->parsed()) {  // its cases run in forked children, which open Vulkan themselves
+    const char* device = std::getenv("POINTDAG_DEVICE");
+    if (const auto choice = gpu::ParseDeviceChoice(device ? device : "auto"); !choice.ok()) {
+      std::cerr << "pointdag bench: " << choice.status().message() << "\n";
       return 2;
     }
   }

@@ -20,11 +20,11 @@ class DeviceEnv {
  public:
   explicit DeviceEnv(const char* value) {
     setenv("POINTDAG_DEVICE", value, 1);
-    ResetProcessDeviceForTesting();
+    ResetProcessDevice();
   }
   ~DeviceEnv() {
     unsetenv("POINTDAG_DEVICE");
-    ResetProcessDeviceForTesting();
+    ResetProcessDevice();
   }
 };
 

@@ -126,7 +126,7 @@ std::string DescribeDevices() {
   return out.empty() ? "no stage decided yet" : out;
 }
 
-void ResetProcessDeviceForTesting() {
+void ResetProcessDevice() {
   ProcessState& s = State();
   std::lock_guard lock(s.mutex);
   s.chosen = false;

@@ -55,8 +55,9 @@ std::vector<StageChoice> StageChoices();  // the stages decided so far, in Stage
 // One line for logs: "color_blocks: cpu (measured: cpu 10.2 ms, vulkan 88.1 ms on llvmpipe ...)".
 std::string DescribeDevices();
 
-// Tests: forget the process's choices so the next call reads POINTDAG_DEVICE again (a device once
-// opened stays open).
-void ResetProcessDeviceForTesting();
+// Tests and benchmarks: forget the process's choices so that the next call reads POINTDAG_DEVICE
+// again (a device once opened stays open). Vulkan does not survive fork(): a process that forks
+// workers (pointdag bench) must leave opening it to them.
+void ResetProcessDevice();
 
 }  // namespace pointdag::gpu
