@@ -122,6 +122,7 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
 
 Status ChooseStageDevices() {
   RETURN_IF_ERROR(VoxelizeDevice().status());
+  RETURN_IF_ERROR(DagHashesDevice().status());
   return ColorBlocksDevice().status();
 }
 

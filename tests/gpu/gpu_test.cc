@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <xxhash.h>
 
 #include <cstdlib>
 #include <map>
@@ -6,6 +7,7 @@
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/gpu/color_blocks.h"
+#include "pointdag/gpu/dag_hashes.h"
 #include "pointdag/gpu/stage_device.h"
 #include "pointdag/gpu/voxel_reduce.h"
 #include "pointdag/gpu/vulkan_context.h"
@@ -194,6 +196,49 @@ TEST(VoxelKernels, OneVoxelPerCodeWithTheMeanRoundedHalfUp) {
       ++v;
     }
   }
+}
+
+// The hashes of HashDagLevels against XXH3 computed here, as the CPU builder hashes cells: bricks
+// from their mask, nodes from their mask and their children's hashes.
+void ExpectBuilderHashes(const std::vector<uint64_t>& morton, int depth) {
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok() && *device) << "no Vulkan device";
+  auto gpu = HashDagLevels(**device, morton, depth);
+  ASSERT_TRUE(gpu.ok()) << gpu.status().message();
+  std::vector<uint64_t> keys = morton, hashes;
+  for (int height = 2; height <= depth; ++height) {
+    const int shift = height == 2 ? 6 : 3;
+    std::vector<uint64_t> next_keys, next_hashes;
+    for (size_t i = 0; i < keys.size();) {
+      std::vector<uint64_t> words = {0};
+      size_t j = i;
+      for (; j < keys.size() && keys[j] >> shift == keys[i] >> shift; ++j) {
+        words[0] |= uint64_t{1} << (keys[j] & ((uint64_t{1} << shift) - 1));
+        if (height > 2) words.push_back(hashes[j]);
+      }
+      next_keys.push_back(keys[i] >> shift);
+      next_hashes.push_back(XXH3_64bits(words.data(), 8 * words.size()));
+      i = j;
+    }
+    ASSERT_EQ(gpu->hashes[height].size(), next_hashes.size()) << "height " << height;
+    for (size_t k = 0; k < next_hashes.size(); ++k) ASSERT_EQ(gpu->hashes[height][k], next_hashes[k]) << "height " << height << " cell " << k;
+    keys.swap(next_keys);
+    hashes.swap(next_hashes);
+  }
+  EXPECT_EQ(gpu->hashes[depth].size(), 1u);
+}
+
+// Every input length (8 to 72 bytes), several tiles per level, and 4096 full bricks in a row (the
+// kernels must keep each invocation under lavapipe's loop limit however dense the voxels).
+TEST(DagKernels, LevelHashesAreTheBuildersXxh3) {
+  DeviceEnv env("vulkan");
+  std::mt19937_64 rng(5);
+  std::vector<uint64_t> morton;
+  for (int i = 0; i < 400000; ++i) morton.push_back(rng() % (uint64_t{1} << 27));  // dense low corner
+  for (uint64_t c = 0; c < (1 << 18); ++c) morton.push_back((uint64_t{3} << 30) | c);  // full subtrees: 8 children
+  std::sort(morton.begin(), morton.end());
+  morton.erase(std::unique(morton.begin(), morton.end()), morton.end());
+  ExpectBuilderHashes(morton, 12);
 }
 
 // The rule of issue #5: the Vulkan path writes the CPU path's .pdag bytes, on every scan, for

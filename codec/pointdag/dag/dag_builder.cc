@@ -2,10 +2,14 @@
 
 #include <xxhash.h>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <string>
 #include <vector>
 
+#include "pointdag/gpu/dag_hashes.h"
+#include "pointdag/gpu/stage_device.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
@@ -32,9 +36,16 @@ class DagMerger::Impl {
  public:
   Impl(int depth, const DagBuildOptions& options) : depth_(depth), options_(options), levels_(depth + 1) {}
 
+  // Hashes computed elsewhere (the Vulkan kernels), per height in Morton order: the streaming pass
+  // interns each height's cells in that order, so it takes them one by one instead of hashing.
+  void UseHashes(std::vector<std::vector<uint64_t>> hashes) {
+    given_ = std::move(hashes);
+    use_given_ = true;
+  }
+
   uint32_t InternBrick(uint64_t brick) {
     UniqueLevel& level = levels_[2];
-    const uint64_t h = XXH3_64bits(&brick, sizeof(brick)) & options_.hash_mask;
+    const uint64_t h = (use_given_ ? Given(2) : XXH3_64bits(&brick, sizeof(brick))) & options_.hash_mask;
     return Intern(level, h, [&](uint32_t id) { return level.brick[id] == brick; }, [&] {
       level.brick.push_back(brick);
       level.count.push_back(options_.mode == CountMode::kMipmap ? BrickMipCount(brick) : BrickVoxelCount(brick));
@@ -54,7 +65,7 @@ class DagMerger::Impl {
       key[1 + i] = below.hash[child_ids[i]];
       count += below.count[child_ids[i]];
     }
-    const uint64_t h = XXH3_64bits(key.data(), sizeof(uint64_t) * (1 + n)) & options_.hash_mask;
+    const uint64_t h = (use_given_ ? Given(height) : XXH3_64bits(key.data(), sizeof(uint64_t) * (1 + n))) & options_.hash_mask;
     return Intern(
         level, h,
         [&](uint32_t id) {
@@ -98,6 +109,9 @@ class DagMerger::Impl {
       if (pending_[height].mask != 0) RETURN_IF_ERROR(Flush(height));
     }
     if (root_ == kNoId) return InvalidArgument("a DAG needs at least one voxel");
+    for (int height = 2; use_given_ && height <= depth_; ++height) {
+      if (given_next_[height] != given_[height].size()) return Internal("the given subtree hashes do not match the DAG's cells");
+    }
     return Status::Ok();
   }
 
@@ -212,6 +226,12 @@ class DagMerger::Impl {
     }
   }
 
+  uint64_t Given(int height) {
+    const auto& level = given_[height];
+    const size_t next = given_next_[height]++;
+    return next < level.size() ? level[next] : 0;  // a shortfall fails Finish()
+  }
+
   static size_t Slot(uint64_t h, size_t mask) { return static_cast<size_t>((h * 0x9E3779B97F4A7C15ull) >> 20) & mask; }
 
   static void Grow(UniqueLevel& level) {
@@ -230,9 +250,18 @@ class DagMerger::Impl {
   std::vector<UniqueLevel> levels_;  // indexed by height
   std::array<Pending, kMaxDepth + 1> pending_;
   uint32_t root_ = kNoId;
+  std::vector<std::vector<uint64_t>> given_;
+  bool use_given_ = false;
+  std::array<size_t, kMaxDepth + 1> given_next_{};
 };
 
 namespace {
+
+// The kernels hash with every bit kept; a narrowed hash (tests) stays on the CPU.
+StatusOr<gpu::VulkanContext*> DeviceForHashes(const DagBuildOptions& options) {
+  if (options.hash_mask != ~uint64_t{0}) return nullptr;
+  return DagHashesDevice();
+}
 
 Status CheckDepth(int depth) {
   if (depth < 2 || depth > kMaxDepth) return InvalidArgument("DAG depth must be 2..21, got " + std::to_string(depth));
@@ -286,6 +315,12 @@ Status DagMerger::AddChunk(std::span<const uint64_t> codes) {
   if (chunk_levels_ == 0) {  // one chunk is the whole grid: stream it in, no sub-DAG to intern twice
     if (added_any_) return InvalidArgument("a grid of one chunk takes one chunk");
     added_any_ = true;
+    ASSIGN_OR_RETURN(gpu::VulkanContext* const device, DeviceForHashes(options_));
+    if (device) {
+      if (codes.back() >> (3 * depth_) != 0) return InvalidArgument("Morton code outside the depth-" + std::to_string(depth_) + " grid");
+      ASSIGN_OR_RETURN(gpu::DagLevelHashes hashes, gpu::HashDagLevels(*device, codes, depth_));
+      impl_->UseHashes(std::move(hashes.hashes));
+    }
     return PushVoxels(*impl_, codes, depth_);
   }
   const int sub_depth = depth_ - chunk_levels_;
@@ -303,12 +338,50 @@ StatusOr<Svdag> DagMerger::Finish() {
   return impl_->Emit();
 }
 
-StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagBuildOptions& options) {
+namespace {
+
+StatusOr<Svdag> BuildDagOn(gpu::VulkanContext* device, std::span<const uint64_t> morton, int depth, const DagBuildOptions& options) {
   RETURN_IF_ERROR(CheckDepth(depth));
   DagMerger::Impl interner(depth, options);
+  if (device && !morton.empty()) {
+    if (morton.back() >> (3 * depth) != 0) return InvalidArgument("Morton code outside the depth-" + std::to_string(depth) + " grid");
+    ASSIGN_OR_RETURN(gpu::DagLevelHashes hashes, gpu::HashDagLevels(*device, morton, depth));
+    interner.UseHashes(std::move(hashes.hashes));
+  }
   RETURN_IF_ERROR(PushVoxels(interner, morton, depth));
   RETURN_IF_ERROR(interner.Finish());
   return interner.Emit();
+}
+
+// Both paths on a depth-10 grid of 2^18 voxels on a few surfaces (Vulkan after a warm-up run).
+StatusOr<gpu::StageTiming> CalibrateDagHashes(gpu::VulkanContext& device) {
+  std::vector<uint64_t> morton;
+  for (uint32_t a = 0; a < 512; ++a) {
+    for (uint32_t b = 0; b < 512; ++b) morton.push_back(MortonEncode(a * 2, b * 2, (a * 3 + b * 5) % 1024 / 2));
+  }
+  std::sort(morton.begin(), morton.end());
+  morton.erase(std::unique(morton.begin(), morton.end()), morton.end());
+  using Clock = std::chrono::steady_clock;
+  const auto seconds = [](Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); };
+  gpu::StageTiming timing;
+  RETURN_IF_ERROR(BuildDagOn(&device, morton, 10, {}).status());
+  auto start = Clock::now();
+  RETURN_IF_ERROR(BuildDagOn(&device, morton, 10, {}).status());
+  timing.vulkan_seconds = seconds(start);
+  start = Clock::now();
+  RETURN_IF_ERROR(BuildDagOn(nullptr, morton, 10, {}).status());
+  timing.cpu_seconds = seconds(start);
+  return timing;
+}
+
+}  // namespace
+
+StatusOr<gpu::VulkanContext*> DagHashesDevice() { return gpu::DeviceFor(gpu::Stage::kDagHashes, CalibrateDagHashes); }
+
+
+StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagBuildOptions& options) {
+  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, DeviceForHashes(options));
+  return BuildDagOn(device, morton, depth, options);
 }
 
 StatusOr<Svdag> MergeSubdags(std::span<const PlacedSubdag> parts, int depth, const DagBuildOptions& options) {

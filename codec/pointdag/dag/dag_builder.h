@@ -20,6 +20,10 @@
 
 #include "pointdag/dag/svdag.h"
 
+namespace pointdag::gpu {
+class VulkanContext;
+}
+
 namespace pointdag {
 
 struct DagBuildOptions {
@@ -29,8 +33,14 @@ struct DagBuildOptions {
   uint64_t hash_mask = ~uint64_t{0};
 };
 
-// DAG of sorted, unique Morton codes on a grid of 2^depth per side (depth 2..21).
+// DAG of sorted, unique Morton codes on a grid of 2^depth per side (depth 2..21). The subtree
+// hashes come from the Vulkan kernels where DagHashesDevice() says so (the same hashes, so the
+// same DAG).
 StatusOr<Svdag> BuildDag(std::span<const uint64_t> morton, int depth, const DagBuildOptions& options = {});
+
+// Where BuildDag hashes subtrees in this process (null: the CPU), per gpu/pointdag/gpu/stage_device.h;
+// under POINTDAG_DEVICE=auto decided on the first call by timing both paths.
+StatusOr<gpu::VulkanContext*> DagHashesDevice();
 
 // A sub-DAG whose root is the cell `prefix` (its Morton code on level depth - dag->depth).
 struct PlacedSubdag {

@@ -73,6 +73,7 @@ StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text) {
 const char* StageName(Stage stage) {
   switch (stage) {
     case Stage::kVoxelize: return "voxelize";
+    case Stage::kDagHashes: return "dag_hashes";
     case Stage::kColorBlocks: return "color_blocks";
   }
   return "?";

@@ -23,7 +23,7 @@ enum class DeviceChoice { kAuto, kVulkan, kCpu };
 StatusOr<DeviceChoice> ParseDeviceChoice(std::string_view text);  // "auto" | "vulkan" | "cpu"
 
 // Stages with Vulkan kernels.
-enum class Stage { kVoxelize, kColorBlocks };
+enum class Stage { kVoxelize, kDagHashes, kColorBlocks };
 const char* StageName(Stage stage);
 
 // The process's device from POINTDAG_DEVICE, opened once (thread-safe). Null under `cpu`, or under

@@ -17,6 +17,7 @@ constexpr uint32_t kTile = 4096;  // as voxel_common.glsl
 constexpr uint32_t kDigits = 256;
 constexpr uint32_t kGroupSize = 64;
 constexpr uint32_t kBuffers = 8;
+constexpr uint32_t kMaxTiles = 60000;
 
 enum KernelId { kHistogram, kScanTiles, kScan, kScatter, kHeads, kAccumulate, kFinish, kKernels };
 struct KernelSource {
@@ -36,7 +37,8 @@ StatusOr<DeviceVoxels> ReduceVoxels(VulkanContext& vulkan, std::span<const uint6
   const size_t count = keys.size();
   if (count == 0) return DeviceVoxels{};
   if (!rgb.empty() && rgb.size() != count) return InvalidArgument("one color per point, or none");
-  if (count > 0xFFFFFFFFull - kTile) return ResourceLimit("too many points for one reduction on the device");
+  // voxel_scan walks one entry per tile in one invocation: keep it under lavapipe's loop limit.
+  if (count > size_t{kMaxTiles} * kTile) return ResourceLimit("too many points for one reduction on the device (lower --chunk-points)");
   std::array<const Kernel*, kKernels> kernels;
   for (int k = 0; k < kKernels; ++k) {
     ASSIGN_OR_RETURN(kernels[k], vulkan.GetKernel(kSources[k].name, kSources[k].spirv, kBuffers, 16));

@@ -149,11 +149,28 @@ Buffer::Buffer(Buffer&& other) noexcept
   other.mapped_ = nullptr;
 }
 
-Buffer::~Buffer() {
+Buffer& Buffer::operator=(Buffer&& other) noexcept {
+  if (this == &other) return *this;
+  Release();
+  context_ = other.context_;
+  size_ = other.size_;
+  mapped_ = other.mapped_;
+  buffer_ = other.buffer_;
+  memory_ = other.memory_;
+  other.buffer_ = other.memory_ = 0;
+  other.mapped_ = nullptr;
+  return *this;
+}
+
+Buffer::~Buffer() { Release(); }
+
+void Buffer::Release() {
   if (!buffer_) return;
   VkDevice device = context_->impl_->device;
   vkDestroyBuffer(device, reinterpret_cast<VkBuffer>(buffer_), nullptr);
   vkFreeMemory(device, reinterpret_cast<VkDeviceMemory>(memory_), nullptr);
+  buffer_ = memory_ = 0;
+  mapped_ = nullptr;
 }
 
 StatusOr<Buffer> VulkanContext::CreateBuffer(size_t bytes) {

@@ -21,7 +21,7 @@ class VulkanContext;
 class Buffer {
  public:
   Buffer(Buffer&& other) noexcept;
-  Buffer& operator=(Buffer&&) = delete;
+  Buffer& operator=(Buffer&& other) noexcept;
   ~Buffer();
   void* data() const { return mapped_; }
   size_t size() const { return size_; }
@@ -29,6 +29,7 @@ class Buffer {
  private:
   friend class VulkanContext;
   Buffer(VulkanContext* context, size_t size) : context_(context), size_(size) {}
+  void Release();
   VulkanContext* context_;
   size_t size_;
   void* mapped_ = nullptr;
