@@ -3,6 +3,8 @@
 #include <array>
 #include <cstring>
 
+#include "pointdag/gpu/tiling.h"
+
 #include "shaders/block_cut.spv.h"
 #include "shaders/block_emit.spv.h"
 #include "shaders/block_merge.spv.h"
@@ -16,7 +18,6 @@ namespace {
 
 constexpr uint32_t kMacroBlockColors = 16384;  // as codec/pointdag/color/block_codec.h
 constexpr uint32_t kLevels = 5;
-constexpr uint32_t kGroupSize = 64;            // local_size_x of every block_*.comp
 constexpr uint32_t kPassesPerSubmit = 4;       // merge passes recorded per submission
 constexpr uint32_t kFixedRateBits = 3;
 
@@ -25,10 +26,6 @@ enum Param { kCount, kMacros, kLevel, kBits, kThresholdLo, kThresholdHi, kFixedR
 static_assert(kParams == Dispatch::kMaxPushWords);
 
 enum KernelId { kStart, kRefit, kPairs, kMerge, kCut, kOpen, kEmit, kKernels };
-struct KernelSource {
-  const char* name;
-  std::span<const uint32_t> spirv;
-};
 const KernelSource kSources[kKernels] = {
     {"block_start", block_start_spirv}, {"block_refit", block_refit_spirv}, {"block_pairs", block_pairs_spirv},
     {"block_merge", block_merge_spirv}, {"block_cut", block_cut_spirv},     {"block_open", block_open_spirv},

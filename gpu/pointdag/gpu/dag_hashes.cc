@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "pointdag/gpu/tiling.h"
+
 #include "shaders/dag_hash.spv.h"
 #include "shaders/dag_heads.spv.h"
 #include "shaders/dag_starts.spv.h"
@@ -10,10 +12,7 @@
 namespace pointdag::gpu {
 namespace {
 
-constexpr uint32_t kTile = 4096;  // as dag_common.glsl
-constexpr uint32_t kGroupSize = 64;
 constexpr uint32_t kBuffers = 6;
-constexpr uint32_t kMaxTiles = 60000;
 
 }  // namespace
 

@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "pointdag/gpu/tiling.h"
+
 #include "shaders/voxel_accumulate.spv.h"
 #include "shaders/voxel_finish.spv.h"
 #include "shaders/voxel_heads.spv.h"
@@ -13,17 +15,10 @@
 namespace pointdag::gpu {
 namespace {
 
-constexpr uint32_t kTile = 4096;  // as voxel_common.glsl
 constexpr uint32_t kDigits = 256;
-constexpr uint32_t kGroupSize = 64;
 constexpr uint32_t kBuffers = 8;
-constexpr uint32_t kMaxTiles = 60000;
 
 enum KernelId { kHistogram, kScanTiles, kScan, kScatter, kHeads, kAccumulate, kFinish, kKernels };
-struct KernelSource {
-  const char* name;
-  std::span<const uint32_t> spirv;
-};
 const KernelSource kSources[kKernels] = {
     {"voxel_histogram", voxel_histogram_spirv}, {"voxel_scan_tiles", voxel_scan_tiles_spirv},
     {"voxel_scan", voxel_scan_spirv},           {"voxel_scatter", voxel_scatter_spirv},
