@@ -12,6 +12,7 @@
 #include "pointdag/gpu/voxel_reduce.h"
 #include "pointdag/gpu/vulkan_context.h"
 #include "pointdag/pipeline.h"
+#include "pointdag/voxelize/morton.h"
 #include "../codec/test_util.h"
 
 namespace pointdag::gpu {
@@ -156,6 +157,20 @@ TEST(ColorBlocksKernel, SameBlocksAsTheCpuOnRandomColors) {
       if (HasFatalFailure()) return;
     }
   }
+}
+
+TEST(VoxelKernels, MortonCodesAreMortonEncode) {
+  DeviceEnv env("vulkan");
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok()) << device.status().message();
+  std::mt19937 rng(3);
+  std::vector<std::array<uint32_t, 3>> cells = {{0, 0, 0}, {0x1FFFFF, 0x1FFFFF, 0x1FFFFF}, {1, 0, 0}, {0, 0, 1}};
+  const auto coordinate = [&] { return static_cast<uint32_t>(rng() & 0x1FFFFF); };
+  for (int i = 0; i < 100000; ++i) cells.push_back({coordinate(), coordinate(), coordinate()});
+  auto codes = MortonCodes(**device, cells);
+  ASSERT_TRUE(codes.ok()) << codes.status().message();
+  ASSERT_EQ(codes->size(), cells.size());
+  for (size_t i = 0; i < cells.size(); ++i) ASSERT_EQ((*codes)[i], MortonEncode(cells[i][0], cells[i][1], cells[i][2])) << "cell " << i;
 }
 
 // Radix sort, unique and mean against a plain map: duplicates within and across tiles (one voxel

@@ -218,19 +218,29 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
   }
   const uint32_t max_cell = (uint32_t{1} << grid.depth) - 1;
   const double inv_size = 1.0 / grid.voxel_size;
+  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, VoxelizeDevice());
   uint64_t read = 0;
   PointBatch batch;
+  std::vector<std::array<uint32_t, 3>> cells;
+  std::vector<uint64_t> codes;
   for (;;) {
     ASSIGN_OR_RETURN(size_t n, reader.Read(batch, options.batch_points));
     if (n == 0) break;
+    cells.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      uint32_t cell[3];
       for (int axis = 0; axis < 3; ++axis) {
         const double c = std::floor((batch.xyz[i][axis] - grid.origin[axis]) * inv_size);
-        cell[axis] = static_cast<uint32_t>(std::clamp(c, 0.0, static_cast<double>(max_cell)));
+        cells[i][axis] = static_cast<uint32_t>(std::clamp(c, 0.0, static_cast<double>(max_cell)));
       }
-      const KeyedPoint p{MortonEncode(cell[0], cell[1], cell[2]),
-                         survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}};
+    }
+    if (device) {
+      ASSIGN_OR_RETURN(codes, gpu::MortonCodes(*device, cells));
+    } else {
+      codes.resize(n);
+      for (size_t i = 0; i < n; ++i) codes[i] = MortonEncode(cells[i][0], cells[i][1], cells[i][2]);
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const KeyedPoint p{codes[i], survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}};
       if (grid.chunk_levels > 0) {
         RETURN_IF_ERROR(spill.Append(static_cast<size_t>(p.key >> chunk_shift), p));
       } else {

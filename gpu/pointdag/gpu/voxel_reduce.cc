@@ -1,5 +1,6 @@
 #include "pointdag/gpu/voxel_reduce.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include "pointdag/gpu/tiling.h"
@@ -8,6 +9,7 @@
 #include "shaders/voxel_finish.spv.h"
 #include "shaders/voxel_heads.spv.h"
 #include "shaders/voxel_histogram.spv.h"
+#include "shaders/voxel_morton.spv.h"
 #include "shaders/voxel_scan.spv.h"
 #include "shaders/voxel_scan_tiles.spv.h"
 #include "shaders/voxel_scatter.spv.h"
@@ -26,6 +28,26 @@ const KernelSource kSources[kKernels] = {
     {"voxel_finish", voxel_finish_spirv}};
 
 }  // namespace
+
+StatusOr<std::vector<uint64_t>> MortonCodes(VulkanContext& vulkan, std::span<const std::array<uint32_t, 3>> cells) {
+  if (cells.empty()) return std::vector<uint64_t>{};
+  if (cells.size() > 0xFFFFFFFFull) return ResourceLimit("too many cells for one dispatch");
+  ASSIGN_OR_RETURN(const Kernel* kernel, vulkan.GetKernel("voxel_morton", voxel_morton_spirv, 2, 4));
+  ASSIGN_OR_RETURN(Buffer cell_buffer, vulkan.CreateBuffer(cells.size() * 12));
+  ASSIGN_OR_RETURN(Buffer codes, vulkan.CreateBuffer(cells.size() * 8));
+  std::memcpy(cell_buffer.data(), cells.data(), cells.size() * 12);
+  const std::array<const Buffer*, 2> bound = {&cell_buffer, &codes};
+  Dispatch d;
+  d.kernel = kernel;
+  d.buffers = bound;
+  d.push[0] = static_cast<uint32_t>(cells.size());
+  const uint64_t groups = (cells.size() + kGroupSize - 1) / kGroupSize;
+  d.groups_x = static_cast<uint32_t>(std::min<uint64_t>(groups, 65535));  // rows of x groups, y rows
+  d.groups_y = static_cast<uint32_t>((groups + d.groups_x - 1) / d.groups_x);
+  RETURN_IF_ERROR(vulkan.Run(std::span<const Dispatch>(&d, 1)));
+  const auto* out = static_cast<const uint64_t*>(codes.data());
+  return std::vector<uint64_t>(out, out + cells.size());
+}
 
 StatusOr<DeviceVoxels> ReduceVoxels(VulkanContext& vulkan, std::span<const uint64_t> keys,
                                     std::span<const std::array<uint16_t, 3>> rgb, int key_bits, uint32_t divisor) {
