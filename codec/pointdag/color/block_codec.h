@@ -12,7 +12,7 @@
 // those with 1 bit gives their parents, and so on up to 4 bits. The tree is then cut bottom-up,
 // keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
 // threshold, so every cut does. All of it is integer arithmetic, so that the Vulkan port
-// (gpu/shaders/block_encode.comp) can return the same blocks.
+// (gpu/shaders/block_*.comp) returns the same blocks.
 //
 // Decoding one color touches one macro-block entry, a binary search over that macro block's block
 // starts, and one weight: no other block is read.

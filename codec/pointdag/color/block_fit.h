@@ -7,7 +7,7 @@
 // projection, then refines A and B by least squares for those weights (keeping the better fit).
 //
 // Every step is integer arithmetic with a fixed order of operations, so that the Vulkan port
-// (gpu/shaders/block_encode.comp) can reproduce it bit for bit: keep the two in step.
+// (gpu/shaders/block_common.glsl) can reproduce it bit for bit: keep the two in step.
 #pragma once
 
 #include <array>
