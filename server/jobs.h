@@ -25,6 +25,7 @@ struct JobLimits {
   size_t capacity = 16;
   std::filesystem::path spill_dir;
   uint64_t max_points_in_memory = uint64_t{1} << 25;
+  int max_attempts = 2;  // a job that failed or took the process down this often is not resumed again
 };
 
 class JobQueue {

@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   service_config.token = config.token;
   service_config.max_upload_bytes = config.max_upload_bytes;
   service_config.upload_dir = config.data_dir / "uploads";
-  service_config.cors_origin = config.cors_origin;
+  service_config.cors_origins = {config.cors_origin};
   service_config.tile_cache_bytes = config.tile_cache_mb << 20;
   Service service(**store, jobs, metrics, service_config);
   HttpServer server(service, metrics, config.http_threads);

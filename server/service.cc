@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "pointdag/json_text.h"
 #include "pointdag/read/scan_reader.h"
 
 namespace pointdag::server {
@@ -164,16 +165,16 @@ Service::Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig c
     : store_(store), jobs_(jobs), metrics_(metrics), config_(std::move(config)), cache_(config_.tile_cache_bytes) {}
 
 void Service::AddCors(HttpResponse& response) const {
-  response.SetHeader("Access-Control-Allow-Origin", config_.cors_origin);
+  response.SetHeader("Access-Control-Allow-Origin", config_.cors_origins.front());
   response.SetHeader("Access-Control-Expose-Headers", "Content-Range, Content-Length, ETag, Location, Accept-Ranges");
-  if (config_.cors_origin != "*") response.SetHeader("Vary", "Origin");
+  if (config_.cors_origins.front() != "*") response.SetHeader("Vary", "Origin");
 }
 
 HttpResponse Service::Json(int status, const nlohmann::json& body, const std::string& route) const {
   HttpResponse r;
   r.status = status;
   r.route = route;
-  r.body = body.dump(2) + "\n";
+  r.body = DumpJson(body, 2) + "\n";
   r.SetHeader("Content-Type", "application/json");
   r.SetHeader("Cache-Control", "no-store");
   AddCors(r);

@@ -36,10 +36,12 @@ struct HttpResponse {
 };
 
 struct ServiceConfig {
-  std::string token;  // empty: writes need no token
+  std::string token;       // write scope (uploads, DELETE; reads too); empty: writes need no token
+  std::string read_token;  // read scope only; empty: none
+  bool require_token_for_reads = false;  // GETs of jobs, datasets, tiles need the read or write token
+  std::vector<std::string> cors_origins{"*"};  // "*" or exact origins echoed back when they match
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   std::filesystem::path upload_dir;
-  std::string cors_origin = "*";
   size_t tile_cache_bytes = size_t{256} << 20;
 };
 

@@ -1,5 +1,7 @@
 #include "store.h"
 
+#include "pointdag/json_text.h"
+
 #include <xxhash.h>
 
 #include <chrono>
@@ -148,7 +150,7 @@ Status Store::CreateJob(const JobRecord& job) {
   Statement s(writer_, "INSERT INTO jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
   const double now = Now();
   return s.Bind(job.id, job.state, job.stage, job.percent, job.points_in, job.voxels_out, job.dataset_id, job.error,
-                job.upload_path, job.params.dump(), now, now)
+                job.upload_path, DumpJson(job.params), now, now)
       .Run();
 }
 
@@ -198,7 +200,7 @@ Status Store::CommitDataset(const std::string& job_id, const std::string& datase
   RETURN_IF_ERROR(Exec(writer_, "BEGIN IMMEDIATE"));
   const auto body = [&]() -> Status {
     const double now = Now();
-    RETURN_IF_ERROR(Statement(writer_, "INSERT INTO datasets VALUES (?,?,?,?)").Bind(dataset_id, name, now, meta.dump()).Run());
+    RETURN_IF_ERROR(Statement(writer_, "INSERT INTO datasets VALUES (?,?,?,?)").Bind(dataset_id, name, now, DumpJson(meta)).Run());
     Statement insert(writer_, "INSERT INTO tiles VALUES (?,?,?,?,?,?,?,?)");
     for (const Tile& t : tiles.tiles) {
       insert.Reset();

@@ -17,6 +17,7 @@
 #include "bench.h"
 #include "pointdag/compare/scorecard.h"
 #include "pointdag/gpu/stage_device.h"
+#include "pointdag/json_text.h"
 #include "client.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
@@ -144,14 +145,14 @@ int RunInfo(const std::string& input, bool json) {
       {"depth", decoded->grid.depth},
       {"voxel_size", decoded->grid.voxel_size},
       {"unique_nodes", decoded->dag.UniqueNodeCount()},
-      {"sections", {{"meta", file->meta.dump().size()}, {"geometry", file->geometry.size()}, {"colors", file->colors.size()}}},
+      {"sections", {{"meta", DumpJson(file->meta).size()}, {"geometry", file->geometry.size()}, {"colors", file->colors.size()}}},
       {"bits_per_voxel", {{"geometry", 8.0 * static_cast<double>(file->geometry.size()) / static_cast<double>(voxels)},
                           {"colors", 8.0 * static_cast<double>(file->colors.size()) / static_cast<double>(voxels)},
                           {"file", 8.0 * static_cast<double>(bytes->size()) / static_cast<double>(voxels)}}},
       {"meta", file->meta},
   };
   if (json) {
-    std::cout << out.dump(2) << "\n";
+    std::cout << DumpJson(out, 2) << "\n";
     return 0;
   }
   const auto& m = file->meta;
@@ -184,7 +185,7 @@ int RunCompare(const std::string& input, const GridChoice& choice, bool json) {
   out["input"] = input;
   const nlohmann::json& codecs = out["codecs"];
   if (json) {
-    std::cout << out.dump(2) << "\n";
+    std::cout << DumpJson(out, 2) << "\n";
     return 0;
   }
   std::printf("%s: %llu points -> %zu voxels (depth %d, voxel %.6g)\n", input.c_str(),

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "pointdag/container/crc32c.h"
+#include "pointdag/json_text.h"
 #include "pointdag/read/byte_io.h"
 
 namespace pointdag {
@@ -35,7 +36,7 @@ uint32_t HeaderCrc(std::span<const uint8_t> header_and_table) {
 }  // namespace
 
 std::vector<uint8_t> SerializePdag(const PdagFile& file) {
-  const std::string meta = file.meta.dump();
+  const std::string meta = DumpJson(file.meta);
   std::vector<Section> sections = {
       {"meta", {reinterpret_cast<const uint8_t*>(meta.data()), meta.size()}},
       {"geometry", file.geometry},
