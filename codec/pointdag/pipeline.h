@@ -76,6 +76,15 @@ struct DecodedPdag {
   std::vector<Rgb8> mip_colors;  // mipmap mode: every node's color in pre-order (index = MipColorIndex)
 };
 
-StatusOr<DecodedPdag> DecodePdag(const PdagFile& file);
+// What a decode may produce, whatever the file declares: a .pdag of a few hundred bytes can
+// describe a DAG of 8^21 voxels, so the caller's memory, not the file, sets the bound.
+// The defaults hold every scan and tile we know with room to spare (tiles hold at most 2^24 voxels)
+// and keep a decode under a few GB.
+struct DecodeLimits {
+  uint64_t max_voxels = uint64_t{1} << 27;  // voxels, and in mipmap mode node colors
+  uint64_t max_nodes = uint64_t{1} << 25;   // unique DAG nodes (a decode holds ~60 bytes per node)
+};
+
+StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limits = {});
 
 }  // namespace pointdag

@@ -80,7 +80,12 @@ StatusOr<std::vector<Rgb8>> DecodeColorAstc(std::span<const uint8_t> payload, ui
   const auto curve = static_cast<Curve>(payload[0]);
   size_t pos = 2;
   uint64_t side = 0;
-  if (!GetVarint(payload, pos, side) || side != TextureSide(count)) return Corrupt("ASTC texture side does not fit the color count");
+  if (!GetVarint(payload, pos, side) || count == 0 || side != TextureSide(count) || side * side < count) {
+    return Corrupt("ASTC texture side does not fit the color count");
+  }
+  // Every color lies in a stored block: the blocks bound the count before anything is allocated.
+  const uint64_t texels_per_block = static_cast<uint64_t>(footprint) * static_cast<uint64_t>(footprint);
+  if (count > (payload.size() - pos) / kBlockBytes * texels_per_block) return Corrupt("ASTC colors hold too few blocks");
   const auto used = UsedBlocks(curve, static_cast<uint32_t>(side), footprint, count);
   const size_t stored = static_cast<size_t>(std::count(used.begin(), used.end(), true));
   if (payload.size() - pos != stored * kBlockBytes) return Corrupt("ASTC colors hold the wrong number of blocks");

@@ -265,6 +265,12 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   if (payload_size != stored.size() - pos) return Truncated("color stream is not as long as its header says");
   if (count != expected_count) return Corrupt("color stream holds " + std::to_string(count) + " colors, expected " + std::to_string(expected_count));
   if (count > 0xFFFFFFFFull || blocks > count || (count > 0 && blocks == 0)) return Corrupt("color stream block count is impossible");
+  // A block of 16384 colors costs at least 11 raw bits of its length's gamma code, and no block
+  // covers more colors per bit: a byte of payload holds less than one macro block of colors.
+  if (count / kMacroBlockColors > payload_size + 8) {
+    return Corrupt("color stream declares " + std::to_string(count) + " colors, more than its " +
+                   std::to_string(payload_size) + " bytes can hold");
+  }
 
   BlockColorDecoder d;
   d.count_ = count;
@@ -273,7 +279,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   uint64_t next = 0, weight_bits = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
-  d.weights_.assign((count * kMaxWeightBits + 63) / 64 + 1, 0);
+  d.weights_.assign(2, 0);  // grows with the weights really decoded, plus one word of padding
   for (uint64_t k = 0; k < blocks; ++k) {
     const uint32_t length = DecodeGamma(rc, models->length[prev_bits], kLengthBits);
     const int bits = layout == BlockLayout::kVariableRate ? static_cast<int>(DecodeBitTree<3>(rc, models->width[prev_bits]))
@@ -294,6 +300,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     d.bits_.push_back(static_cast<uint8_t>(bits));
     d.ends_.push_back(ends);
     uint32_t prev_w = 16;
+    if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     for (uint32_t i = 0; bits && i < length; ++i) {
       const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][prev_w], bits);
       d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);

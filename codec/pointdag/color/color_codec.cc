@@ -6,6 +6,7 @@
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/entropy/zstd_stream.h"
 
 namespace pointdag {
 namespace {
@@ -29,11 +30,13 @@ StatusOr<std::vector<uint8_t>> LosslessPayload(std::span<const Rgb8> colors) {
 }
 
 StatusOr<std::vector<Rgb8>> DecodeLossless(std::span<const uint8_t> payload, uint64_t count) {
-  const unsigned long long size = ZSTD_getFrameContentSize(payload.data(), payload.size());
-  if (size != 3 * count) return Corrupt("lossless colors do not hold one RGB per voxel");
-  std::vector<uint8_t> planes(size);
-  const size_t n = ZSTD_decompress(planes.data(), planes.size(), payload.data(), payload.size());
-  if (ZSTD_isError(n) || n != size) return Corrupt("lossless colors fail to decompress");
+  // The frame's content-size field only rejects early; the output grows with what really comes out.
+  if (ZSTD_getFrameContentSize(payload.data(), payload.size()) != 3 * count) {
+    return Corrupt("lossless colors do not hold one RGB per voxel");
+  }
+  std::vector<uint8_t> planes;
+  if (Status s = DecompressBounded(payload, 3 * count, planes, "lossless colors"); !s.ok()) return Corrupt(s.message());
+  if (planes.size() != 3 * count) return Corrupt("lossless colors do not hold one RGB per voxel");
   std::vector<Rgb8> colors(count);
   Rgb8 prev{};
   for (size_t i = 0; i < count; ++i) {
@@ -200,6 +203,8 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
 
 StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count) {
   if (section.empty()) return Truncated("colors section is empty");
+  if (count == 0) return Corrupt("a colors section for no voxels");
+  if (count > kMaxColors) return ResourceLimit(std::to_string(count) + " colors are more than a colors section may hold");
   const auto payload = section.subspan(1);
   switch (static_cast<ColorCodec>(section[0])) {
     case ColorCodec::kRaw: {

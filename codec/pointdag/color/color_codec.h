@@ -47,7 +47,11 @@ struct EncodedColors {
 
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options);
 
-// Decodes a colors section that must hold `count` colors.
+// Color indices are 32-bit in the block codec and the DAG's counts: the most a section may hold.
+constexpr uint64_t kMaxColors = uint64_t{1} << 32;
+
+// Decodes a colors section that must hold `count` colors (1..kMaxColors). `count` must come from
+// decoded geometry, never from metadata alone: the decoders allocate by it.
 StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count);
 
 }  // namespace pointdag

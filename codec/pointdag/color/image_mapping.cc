@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdio>
@@ -37,11 +38,38 @@ class TempImage {
   std::string path_;
 };
 
+// Our own look at the image before OpenImageIO's: the format's signature, and for PNG the size
+// that deflate (at most 1032:1) can expand its bytes to. The side itself is already bound to the
+// validated color count; JPEG and WebP stop at 16384 (the encoder's limit too).
+Status CheckImageBytes(std::span<const uint8_t> image, ImageFormat format, uint64_t side) {
+  static constexpr uint8_t kPngMagic[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  static constexpr uint8_t kJpegMagic[] = {0xFF, 0xD8, 0xFF};
+  const auto starts_with = [&](std::span<const uint8_t> magic, size_t at = 0) {
+    return image.size() >= at + magic.size() && std::equal(magic.begin(), magic.end(), image.begin() + static_cast<long>(at));
+  };
+  bool signed_ok = false;
+  switch (format) {
+    case ImageFormat::kPng: signed_ok = starts_with(kPngMagic); break;
+    case ImageFormat::kJpeg: signed_ok = starts_with(kJpegMagic); break;
+    case ImageFormat::kWebp: {
+      static constexpr uint8_t kRiff[] = {'R', 'I', 'F', 'F'}, kWebp[] = {'W', 'E', 'B', 'P'};
+      signed_ok = starts_with(kRiff) && starts_with(kWebp, 8);
+      break;
+    }
+  }
+  if (!signed_ok) return Corrupt(std::string("color image is not a ") + ImageFormatName(format) + " file");
+  if (format != ImageFormat::kPng && side > kMaxLossyTextureSide) return Corrupt("color image is larger than JPEG/WebP allow");
+  if (format == ImageFormat::kPng && side * (3 * side + 1) > 1032 * image.size() + 65536) {
+    return Corrupt("color PNG is too small to hold a " + std::to_string(side) + "x" + std::to_string(side) + " image");
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 uint32_t TextureSide(uint64_t count) {
   uint32_t side = 1;
-  while (uint64_t{side} * side < count) side <<= 1;
+  while (uint64_t{side} * side < count && side < kMaxTextureSide) side <<= 1;
   return side;
 }
 
@@ -110,7 +138,7 @@ StatusOr<std::vector<uint8_t>> EncodeColorImage(std::span<const Rgb8> colors, Cu
                                                 int quality) {
   if (colors.empty()) return InvalidArgument("no colors to map");
   const uint32_t side = TextureSide(colors.size());
-  if (side > 16384 && format != ImageFormat::kPng) return ResourceLimit("texture too large for JPEG/WebP");
+  if (side > kMaxLossyTextureSide && format != ImageFormat::kPng) return ResourceLimit("texture too large for JPEG/WebP");
   const std::vector<uint8_t> pixels = LayOutTexture(colors, curve, side, 3);
   TempImage file(format);
   if (file.path().empty()) return IoError("cannot create a temporary image file");
@@ -136,20 +164,26 @@ StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t> payload, u
   const auto format = static_cast<ImageFormat>(payload[1]);
   size_t pos = 2;
   uint64_t side = 0;
-  if (!GetVarint(payload, pos, side) || side != TextureSide(count)) {
+  if (!GetVarint(payload, pos, side) || count == 0 || side != TextureSide(count) || side * side < count) {
     return Corrupt("color image side does not fit the color count");
   }
+  const auto image = payload.subspan(pos);
+  RETURN_IF_ERROR(CheckImageBytes(image, format, side));
   TempImage file(format);
   if (file.path().empty()) return IoError("cannot create a temporary image file");
-  RETURN_IF_ERROR(WriteFileAtomically(file.path(), payload.subspan(pos)));
-  auto in = OIIO::ImageInput::open(file.path());
-  if (!in) return Corrupt("color image cannot be opened: " + OIIO::geterror());
+  RETURN_IF_ERROR(WriteFileAtomically(file.path(), image));
+  // The plugin of the stored format only: OpenImageIO would otherwise try every format it knows.
+  auto in = OIIO::ImageInput::create(ImageFormatName(format));
+  if (!in) return Unsupported(std::string("OpenImageIO cannot read ") + ImageFormatName(format));
+  OIIO::ImageSpec config;
+  if (!in->open(file.path(), config)) return Corrupt("color image cannot be opened: " + in->geterror());
   const OIIO::ImageSpec& spec = in->spec();
-  if (uint64_t(spec.width) != side || uint64_t(spec.height) != side || spec.nchannels < 3) {
+  if (spec.width < 0 || spec.height < 0 || uint64_t(spec.width) != side || uint64_t(spec.height) != side ||
+      spec.depth != 1 || spec.nchannels < 3) {
     return Corrupt("color image has the wrong size or channels");
   }
   std::vector<uint8_t> pixels(side * side * 3);
-  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data())) return Corrupt("color image fails to decode");
+  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data())) return Corrupt("color image fails to decode: " + in->geterror());
   return GatherTexture(pixels, curve, static_cast<uint32_t>(side), 3, count);
 }
 

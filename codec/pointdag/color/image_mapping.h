@@ -24,7 +24,10 @@ const char* ImageFormatName(ImageFormat format);
 // Texel (x, y) of position i along the curve on a side x side texture (side a power of two).
 std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side);
 
-// The smallest power-of-two side whose square holds `count` texels.
+constexpr uint32_t kMaxTextureSide = uint32_t{1} << 16;  // 2^32 texels: kMaxColors
+constexpr uint32_t kMaxLossyTextureSide = 16384;         // WebP's limit
+
+// The smallest power-of-two side whose square holds `count` texels (at most kMaxTextureSide).
 uint32_t TextureSide(uint64_t count);
 // Colors along the curve into a side x side texture of `channels` 8-bit channels (alpha = 255),
 // row-major; texels past the last color repeat it.

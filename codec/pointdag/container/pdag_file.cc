@@ -109,8 +109,11 @@ StatusOr<PdagFile> ParsePdag(std::span<const uint8_t> bytes) {
       return Corrupt(".pdag holds section '" + tag + "' twice");
     }
     if (tag == "meta") {
-      file.meta = nlohmann::json::parse(data.begin(), data.end(), nullptr, /*allow_exceptions=*/false);
-      if (file.meta.is_discarded() || !file.meta.is_object()) return Corrupt(".pdag metadata is not a JSON object");
+      // Bounded nesting: metadata nested 300,000 deep would overflow the stack in nlohmann's parser.
+      auto meta = ParseJson(std::string_view(reinterpret_cast<const char*>(data.data()), data.size()));
+      if (!meta.ok()) return Corrupt(".pdag metadata is not valid JSON: " + meta.status().message());
+      if (!meta->is_object()) return Corrupt(".pdag metadata is not a JSON object");
+      file.meta = std::move(*meta);
       have_meta = true;
     } else if (tag == "geometry") {
       file.geometry.assign(data.begin(), data.end());

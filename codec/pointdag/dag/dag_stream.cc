@@ -9,6 +9,7 @@
 
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
+#include "pointdag/entropy/zstd_stream.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
@@ -23,6 +24,9 @@ constexpr int kZstdLevel = 19;
 constexpr int kVoxelClass = 1;
 constexpr int kBrickCellClass = 2;
 constexpr int kMaskClasses = kMaxDepth + 1;
+// A coded bit costs at least -log2(1 - 4/4096) = 0.0014 bits (12-bit probabilities of at most
+// 4091/4096, plus the coder's rounding) and a node at least one 8-bit mask: 8 / (8 x 0.0014) < 720.
+constexpr uint64_t kMaxContextNodesPerByte = 720;
 
 int InternalClass(const Svdag& dag, int level) { return dag.depth - level; }
 
@@ -68,39 +72,32 @@ class ZstdSink {
   uint64_t flag_bits_ = 0;
 };
 
-// Streams a zstd frame out, growing the output only as real data arrives, so a frame that lies
-// about its size cannot make us allocate more than its bytes can expand to (or `limit`).
-Status Decompress(std::span<const uint8_t> frame, uint64_t limit, std::vector<uint8_t>& out) {
-  std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
-  ZSTD_inBuffer in = {frame.data(), frame.size(), 0};
-  std::vector<uint8_t> chunk(ZSTD_DStreamOutSize());
-  size_t last = 1;
-  while (in.pos < in.size || last != 0) {
-    ZSTD_outBuffer o = {chunk.data(), chunk.size(), 0};
-    last = ZSTD_decompressStream(ctx.get(), &o, &in);
-    if (ZSTD_isError(last)) return Corrupt(std::string("geometry stream fails to decompress: ") + ZSTD_getErrorName(last));
-    out.insert(out.end(), chunk.data(), chunk.data() + o.pos);
-    if (out.size() > limit) return Corrupt("geometry stream holds more data than the DAG can need");
-    if (o.pos == 0 && in.pos == in.size && last != 0) return Truncated("geometry stream's zstd frame is cut short");
-  }
-  return Status::Ok();
-}
-
 class ZstdSource {
  public:
-  // Decompresses the three streams that follow `pos`; `limit` caps each stream's size.
-  Status Open(std::span<const uint8_t> bytes, size_t pos, uint64_t limit) {
+  // Decompresses the three streams that follow `pos`. The masks may hold what `counts` can need:
+  // one per node, a brick's cell mask plus up to 8 voxel masks. The internal nodes' masks then say
+  // how many children there are: a flag bit each, a varint of at most 5 bytes per reference.
+  Status Open(std::span<const uint8_t> bytes, size_t pos, const std::vector<uint64_t>& counts) {
     uint64_t lengths[3];
     for (auto& len : lengths) {
       if (!GetVarint(bytes, pos, len)) return Truncated("geometry stream ends inside its length table");
     }
-    std::vector<uint8_t>* streams[3] = {&masks_, &flags_, &refs_};
-    for (int i = 0; i < 3; ++i) {
+    uint64_t internal = 0;
+    for (size_t level = 0; level + 1 < counts.size(); ++level) internal += counts[level];
+    const auto frame = [&](int i) -> StatusOr<std::span<const uint8_t>> {
       if (lengths[i] > bytes.size() - pos) return Truncated("geometry stream is shorter than its length table says");
-      RETURN_IF_ERROR(Decompress(bytes.subspan(pos, lengths[i]), limit, *streams[i]));
+      const auto out = bytes.subspan(pos, lengths[i]);
       pos += lengths[i];
-    }
-    return Status::Ok();
+      return out;
+    };
+    ASSIGN_OR_RETURN(const auto masks, frame(0));
+    RETURN_IF_ERROR(DecompressBounded(masks, internal + 9 * counts.back(), masks_, "geometry mask stream"));
+    uint64_t children = 0;
+    for (size_t i = 0; i < std::min<uint64_t>(internal, masks_.size()); ++i) children += std::popcount(masks_[i]);
+    ASSIGN_OR_RETURN(const auto flags, frame(1));
+    RETURN_IF_ERROR(DecompressBounded(flags, children / 8 + 1, flags_, "geometry flag stream"));
+    ASSIGN_OR_RETURN(const auto refs, frame(2));
+    return DecompressBounded(refs, 5 * children, refs_, "geometry reference stream");
   }
   uint8_t Mask(int) { return mask_pos_ < masks_.size() ? masks_[mask_pos_++] : Fail(); }
   bool Flag(int) {
@@ -344,19 +341,28 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   size_t pos = 4;
   std::vector<uint64_t> counts(static_cast<size_t>(depth - 2) + 1);
   uint64_t total = 0;
-  for (auto& c : counts) {
+  for (size_t level = 0; level < counts.size(); ++level) {
+    uint64_t& c = counts[level];
     if (!GetVarint(bytes, pos, c)) return Truncated("geometry stream ends inside its level table");
+    if (c == 0 || c > max_nodes - total) return Corrupt("geometry stream declares more nodes than its voxels allow");
+    // A node has at most 8 children: a level can hold at most 8 times the nodes of the one above.
+    if (level > 0 && c > 8 * counts[level - 1]) return Corrupt("geometry stream declares an impossible node count");
     total += c;
-    if (c == 0 || total > max_nodes) return Corrupt("geometry stream declares an impossible node count");
   }
   if (counts[0] != 1) return Corrupt("geometry stream must have exactly one root");
 
   StatusOr<Svdag> dag = Corrupt("unreachable");
   if (coder == GeometryCoder::kZstd) {
     ZstdSource source;
-    RETURN_IF_ERROR(source.Open(bytes, pos, total * 48 + 64));
+    RETURN_IF_ERROR(source.Open(bytes, pos, counts));
     dag = ReadSymbols(source, depth, mode, counts);
   } else {
+    // The payload's size bounds the nodes it can hold (kMaxContextNodesPerByte).
+    const uint64_t payload = bytes.size() - pos + 8;  // + the zero bytes the decoder may read past the end
+    if (total > payload * kMaxContextNodesPerByte) {
+      return Corrupt("geometry stream declares " + std::to_string(total) + " nodes, more than its " +
+                     std::to_string(bytes.size() - pos) + " bytes can hold");
+    }
     ContextSource source(bytes.subspan(pos));
     dag = ReadSymbols(source, depth, mode, counts);
   }
