@@ -4,14 +4,15 @@
 
 namespace pointdag {
 
-const nlohmann::json* JsonFields::Find(std::string_view path) const {
+StatusOr<const nlohmann::json*> JsonFields::Lookup(std::string_view path) const {
   const nlohmann::json* node = &root_;
+  const std::string_view full = path;
   while (!path.empty()) {
     if (path.front() == '/') path.remove_prefix(1);
     const size_t end = path.find('/');
     const std::string_view key = path.substr(0, end);
+    if (!node->is_object()) return Refuse(full.substr(0, static_cast<size_t>(key.data() - full.data())), "is not an object");
     path.remove_prefix(end == std::string_view::npos ? path.size() : end);
-    if (!node->is_object()) return nullptr;
     const auto it = node->find(key);
     if (it == node->end()) return nullptr;
     node = &*it;
@@ -19,12 +20,17 @@ const nlohmann::json* JsonFields::Find(std::string_view path) const {
   return node;
 }
 
+const nlohmann::json* JsonFields::Find(std::string_view path) const {
+  const auto found = Lookup(path);
+  return found.ok() ? *found : nullptr;
+}
+
 Status JsonFields::Refuse(std::string_view path, const std::string& why) const {
   return {code_, context_ + " '" + std::string(path.substr(path.starts_with('/') ? 1 : 0)) + "' " + why};
 }
 
 StatusOr<const nlohmann::json*> JsonFields::Required(std::string_view path) const {
-  const nlohmann::json* member = Find(path);
+  ASSIGN_OR_RETURN(const nlohmann::json* member, Lookup(path));
   if (!member) return Refuse(path, "is missing");
   return member;
 }
@@ -85,11 +91,13 @@ StatusOr<const nlohmann::json*> JsonFields::Array(std::string_view path) const {
 }
 
 StatusOr<uint64_t> JsonFields::UintOr(std::string_view path, uint64_t max, uint64_t fallback) const {
-  return Has(path) ? Uint(path, max) : fallback;
+  ASSIGN_OR_RETURN(const nlohmann::json* member, Lookup(path));
+  return member ? Uint(path, max) : fallback;
 }
 
 StatusOr<std::string> JsonFields::StringOr(std::string_view path, std::string fallback) const {
-  return Has(path) ? String(path) : StatusOr<std::string>(std::move(fallback));
+  ASSIGN_OR_RETURN(const nlohmann::json* member, Lookup(path));
+  return member ? String(path) : StatusOr<std::string>(std::move(fallback));
 }
 
 }  // namespace pointdag

@@ -23,7 +23,7 @@ class JsonFields {
   JsonFields(const nlohmann::json& root, std::string context, StatusCode code = StatusCode::kCorrupt)
       : root_(root), context_(std::move(context)), code_(code) {}
 
-  // The member, or null when it (or an object on its path) is absent.
+  // The member, or null when it (or an object on its path) is absent or the path crosses a non-object.
   const nlohmann::json* Find(std::string_view path) const;
   bool Has(std::string_view path) const { return Find(path) != nullptr; }
 
@@ -34,11 +34,13 @@ class JsonFields {
   StatusOr<std::array<double, 3>> Vec3(std::string_view path) const;  // three finite numbers
   StatusOr<const nlohmann::json*> Array(std::string_view path) const;
 
-  // Absent: the fallback. Present with the wrong type or out of range: still an error.
+  // Absent: the fallback. Present with the wrong type or out of range, or a path through a
+  // non-object: still an error.
   StatusOr<uint64_t> UintOr(std::string_view path, uint64_t max, uint64_t fallback) const;
   StatusOr<std::string> StringOr(std::string_view path, std::string fallback) const;
 
  private:
+  StatusOr<const nlohmann::json*> Lookup(std::string_view path) const;  // null when absent
   StatusOr<const nlohmann::json*> Required(std::string_view path) const;
   Status Refuse(std::string_view path, const std::string& why) const;
 
