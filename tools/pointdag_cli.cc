@@ -16,6 +16,7 @@
 
 #include "bench.h"
 #include "pointdag/compare/scorecard.h"
+#include "pointdag/container/json_fields.h"
 #include "pointdag/gpu/stage_device.h"
 #include "pointdag/json_text.h"
 #include "client.h"
@@ -131,6 +132,39 @@ int RunDecode(const std::string& input, const std::string& output) {
   return 0;
 }
 
+// The text form of `info`: optional metadata read through checked accessors (a hostile file's
+// wrong types are refused, never thrown).
+Status PrintInfo(const std::string& input, size_t file_bytes, const PdagFile& file, const DecodedPdag& decoded,
+                 const nlohmann::json& out) {
+  const JsonFields m(file.meta, ".pdag metadata");
+  ASSIGN_OR_RETURN(const std::string name, m.StringOr("source/name", "?"));
+  ASSIGN_OR_RETURN(const std::string format, m.StringOr("source/format", "?"));
+  ASSIGN_OR_RETURN(const std::string version, m.StringOr("source/version", ""));
+  ASSIGN_OR_RETURN(const uint64_t points, m.UintOr("source/points", std::numeric_limits<uint64_t>::max(), 0));
+  ASSIGN_OR_RETURN(const std::string geometry_coder, m.StringOr("codec/geometry", "?"));
+  ASSIGN_OR_RETURN(const std::string color_codec, m.StringOr("codec/colors/codec", "?"));
+  std::optional<double> psnr_y;
+  if (m.Has("codec/colors/psnr_y")) {
+    ASSIGN_OR_RETURN(psnr_y, m.Number("codec/colors/psnr_y"));
+  }
+  ASSIGN_OR_RETURN(const std::string wkt, m.StringOr("crs/wkt", ""));
+  const size_t voxels = decoded.grid.morton.size();
+  std::printf("file        %s (%zu bytes)\n", input.c_str(), file_bytes);
+  std::printf("source      %s (%s %s), %llu points\n", name.c_str(), format.c_str(), version.c_str(),
+              static_cast<unsigned long long>(points));
+  std::printf("grid        depth %d, voxel %.6g, origin (%.3f, %.3f, %.3f)\n", decoded.grid.depth, decoded.grid.voxel_size,
+              decoded.grid.origin[0], decoded.grid.origin[1], decoded.grid.origin[2]);
+  std::printf("voxels      %zu (%zu unique DAG nodes)\n", voxels, decoded.dag.UniqueNodeCount());
+  std::printf("geometry    %zu bytes, %.3f bits/voxel (%s)\n", file.geometry.size(),
+              out["bits_per_voxel"]["geometry"].get<double>(), geometry_coder.c_str());
+  std::printf("colors      %zu bytes, %.3f bits/voxel (%s", file.colors.size(), out["bits_per_voxel"]["colors"].get<double>(),
+              color_codec.c_str());
+  if (psnr_y) std::printf(", PSNR-Y %.2f dB", *psnr_y);
+  std::printf(")\n");
+  std::printf("crs         %s\n", wkt.empty() ? "none (local frame)" : (wkt.substr(0, 72) + (wkt.size() > 72 ? "..." : "")).c_str());
+  return Status::Ok();
+}
+
 int RunInfo(const std::string& input, bool json) {
   auto bytes = ReadFileBytes(input);
   if (!bytes.ok()) return Fail(bytes.status());
@@ -138,40 +172,26 @@ int RunInfo(const std::string& input, bool json) {
   if (!file.ok()) return Fail(file.status());
   auto decoded = DecodePdag(*file);  // info vouches for the whole file, not just its header
   if (!decoded.ok()) return Fail(decoded.status());
-  const size_t voxels = decoded->grid.morton.size();
+  const auto per_voxel = [&](size_t bytes_count) {
+    return 8.0 * static_cast<double>(bytes_count) / static_cast<double>(decoded->grid.morton.size());
+  };
   nlohmann::json out = {
       {"file_bytes", bytes->size()},
-      {"voxels", voxels},
+      {"voxels", decoded->grid.morton.size()},
       {"depth", decoded->grid.depth},
       {"voxel_size", decoded->grid.voxel_size},
       {"unique_nodes", decoded->dag.UniqueNodeCount()},
       {"sections", {{"meta", DumpJson(file->meta).size()}, {"geometry", file->geometry.size()}, {"colors", file->colors.size()}}},
-      {"bits_per_voxel", {{"geometry", 8.0 * static_cast<double>(file->geometry.size()) / static_cast<double>(voxels)},
-                          {"colors", 8.0 * static_cast<double>(file->colors.size()) / static_cast<double>(voxels)},
-                          {"file", 8.0 * static_cast<double>(bytes->size()) / static_cast<double>(voxels)}}},
+      {"bits_per_voxel", {{"geometry", per_voxel(file->geometry.size())},
+                          {"colors", per_voxel(file->colors.size())},
+                          {"file", per_voxel(bytes->size())}}},
       {"meta", file->meta},
   };
   if (json) {
     std::cout << DumpJson(out, 2) << "\n";
     return 0;
   }
-  const auto& m = file->meta;
-  std::printf("file        %s (%zu bytes)\n", input.c_str(), bytes->size());
-  std::printf("source      %s (%s %s), %s points\n", m.value("/source/name"_json_pointer, std::string("?")).c_str(),
-              m.value("/source/format"_json_pointer, std::string("?")).c_str(),
-              m.value("/source/version"_json_pointer, std::string("")).c_str(),
-              std::to_string(m.value("/source/points"_json_pointer, uint64_t{0})).c_str());
-  std::printf("grid        depth %d, voxel %.6g, origin (%.3f, %.3f, %.3f)\n", decoded->grid.depth,
-              decoded->grid.voxel_size, decoded->grid.origin[0], decoded->grid.origin[1], decoded->grid.origin[2]);
-  std::printf("voxels      %zu (%zu unique DAG nodes)\n", voxels, decoded->dag.UniqueNodeCount());
-  std::printf("geometry    %zu bytes, %.3f bits/voxel (%s)\n", file->geometry.size(),
-              out["bits_per_voxel"]["geometry"].get<double>(), m.value("/codec/geometry"_json_pointer, std::string("?")).c_str());
-  std::printf("colors      %zu bytes, %.3f bits/voxel (%s", file->colors.size(), out["bits_per_voxel"]["colors"].get<double>(),
-              m.value("/codec/colors/codec"_json_pointer, std::string("?")).c_str());
-  if (m.contains("/codec/colors/psnr_y"_json_pointer)) std::printf(", PSNR-Y %.2f dB", m["codec"]["colors"]["psnr_y"].get<double>());
-  std::printf(")\n");
-  const std::string wkt = m.value("/crs/wkt"_json_pointer, std::string());
-  std::printf("crs         %s\n", wkt.empty() ? "none (local frame)" : (wkt.substr(0, 72) + (wkt.size() > 72 ? "..." : "")).c_str());
+  if (Status s = PrintInfo(input, bytes->size(), *file, *decoded, out); !s.ok()) return Fail(s);
   return 0;
 }
 
@@ -319,4 +339,15 @@ int Main(int argc, char** argv) {
 }  // namespace
 }  // namespace pointdag
 
-int main(int argc, char** argv) { return pointdag::Main(argc, argv); }
+// Last resort only: every input error is a Status by design; an exception that still escapes
+// (bad_alloc on a machine short of memory, a library's own throw) ends in a reason and exit 1.
+int main(int argc, char** argv) {
+  try {
+    return pointdag::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "pointdag: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "pointdag: unknown error\n";
+  }
+  return 1;
+}

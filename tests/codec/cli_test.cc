@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "hostile_pdag.h"
 #include "pointdag/read/scan_reader.h"
 #include "test_util.h"
 
@@ -142,6 +143,45 @@ TEST(Cli, ExitCodesAreOneForBadInputAndTwoForUsage) {
   EXPECT_EQ(Cli("encode " + scan + " -o x.pdag --depth 30", dir).exit_code, 2);
   EXPECT_EQ(Cli("encode " + scan + " -o x.pdag --voxel -1", dir).exit_code, 2);
   EXPECT_EQ(Cli("--help", dir).exit_code, 0);
+}
+
+// Issue 11: hostile .pdag files made `info` and `decode` die of bad_alloc, an uncaught type_error
+// or a stack overflow. Each is now exit 1 and `pointdag: <reason>`.
+TEST(Cli, HostilePdagIsExitOneWithAReasonNeverAnAbort) {
+  ScratchDir dir;
+  const auto geometry = EncodeDag(testing::DenseCube(4), GeometryCoder::kContext).value();
+  const auto write = [&](const std::string& name, nlohmann::json meta, const std::vector<uint8_t>& geo) {
+    PdagFile file;
+    file.meta = std::move(meta);
+    file.geometry = geo;
+    ASSERT_TRUE(WritePdag(dir / name, file).ok());
+  };
+  write("billion.pdag", testing::MinimalMeta(uint64_t{1} << 30, 10), EncodeDag(testing::DenseCube(10), GeometryCoder::kContext).value());
+  auto meta = testing::MinimalMeta(4096, 4);
+  meta["source"] = {{"points", "many"}};
+  write("points.pdag", meta, geometry);
+  meta = testing::MinimalMeta(4096, 4);
+  meta["codec"] = {{"colors", {{"psnr_y", "high"}}}};
+  write("psnr.pdag", meta, geometry);
+  const std::string nested = "{\"a\":" + std::string(300000, '[') + std::string(300000, ']') + "}";
+  testing::WriteBytes(dir / "nested.pdag", testing::RewrapPdag(nested, geometry));
+
+  const std::pair<const char*, const char*> cases[] = {
+      {"billion.pdag", "ResourceLimit: .pdag declares 1073741824 voxels"},
+      {"points.pdag", "Corrupt: .pdag metadata 'source/points' is not an integer"},
+      {"psnr.pdag", "Corrupt: .pdag metadata 'codec/colors/psnr_y' is not a number"},
+      {"nested.pdag", "Corrupt: .pdag metadata is not valid JSON: JSON nested deeper than 64 levels"},
+  };
+  for (const auto& [name, reason] : cases) {
+    const CliRun info = Cli("info " + (dir / name).string(), dir);
+    EXPECT_EQ(info.exit_code, 1) << name << ": " << info.err;
+    EXPECT_EQ(info.err.rfind(std::string("pointdag: ") + reason, 0), 0u) << name << ": " << info.err;
+  }
+  // decode reads the metadata it needs the same way; psnr_y is only shown by info.
+  EXPECT_EQ(Cli("decode " + (dir / "points.pdag").string() + " -o " + (dir / "x.ply").string(), dir).exit_code, 1);
+  const CliRun decode = Cli("decode " + (dir / "psnr.pdag").string() + " -o " + (dir / "x.ply").string(), dir);
+  EXPECT_EQ(decode.exit_code, 0) << decode.err;
+  EXPECT_NE(decode.err.find("4096 voxels"), std::string::npos) << decode.err;
 }
 
 TEST(Cli, VoxelTooSmallIsBadInputWithAReason) {
