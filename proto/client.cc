@@ -6,8 +6,11 @@
 
 #include <charconv>
 #include <deque>
+#include <set>
 
+#include "pointdag/container/json_fields.h"
 #include "pointdag/container/pdag_file.h"
+#include "pointdag/json_text.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/voxelize/morton.h"
 
@@ -49,6 +52,7 @@ struct Connection::Impl {
   beast::tcp_stream stream{io};
   beast::flat_buffer buffer;
   std::string host;
+  uint64_t max_body_bytes = kDefaultMaxBodyBytes;
 
   template <typename Body>
   StatusOr<Response> Exchange(http::request<Body>& request) {
@@ -59,9 +63,19 @@ struct Connection::Impl {
     http::write(stream, request, ec);
     if (ec) return IoError("sending the request failed: " + ec.message());
     http::response_parser<http::string_body> parser;
-    parser.body_limit(std::numeric_limits<std::uint64_t>::max());
+    parser.body_limit(max_body_bytes);
     if (request.method() == http::verb::head) parser.skip(true);
-    http::read(stream, buffer, parser, ec);
+    // The header first: a declared length above the limit is refused before the body reader
+    // would reserve it.
+    http::read_header(stream, buffer, parser, ec);
+    const auto declared = parser.content_length();
+    if (ec == http::error::body_limit || (!ec && declared && *declared > max_body_bytes)) {
+      return ResourceLimit("the response body is larger than the " + std::to_string(max_body_bytes) + " bytes allowed");
+    }
+    if (!ec) http::read(stream, buffer, parser, ec);
+    if (ec == http::error::body_limit) {
+      return ResourceLimit("the response body is larger than the " + std::to_string(max_body_bytes) + " bytes allowed");
+    }
     if (ec) return IoError("reading the response failed: " + ec.message());
     Response out;
     out.status = static_cast<int>(parser.get().result_int());
@@ -81,8 +95,9 @@ Connection::~Connection() {
   impl_->stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
 }
 
-StatusOr<std::unique_ptr<Connection>> Connection::Open(const std::string& host, uint16_t port) {
+StatusOr<std::unique_ptr<Connection>> Connection::Open(const std::string& host, uint16_t port, uint64_t max_body_bytes) {
   auto impl = std::make_unique<Impl>();
+  impl->max_body_bytes = max_body_bytes;
   impl->host = host + ":" + std::to_string(port);
   beast::error_code ec;
   tcp::resolver resolver(impl->io);
@@ -120,62 +135,149 @@ StatusOr<Response> Connection::Upload(const std::string& target, const std::file
   return impl_->Exchange(request);
 }
 
+namespace {
+
+StatusOr<nlohmann::json> ParseServerJson(std::string_view body, const std::string& what) {
+  auto json = ParseJson(body);
+  if (!json.ok()) return Malformed(what + " is not JSON: " + json.status().message());
+  if (!json->is_object()) return Malformed(what + " is not a JSON object");
+  return json;
+}
+
+StatusOr<TileAddress> ParseAddress(const nlohmann::json& entry, int max_level, const std::string& what) {
+  const JsonFields fields(entry, what, StatusCode::kMalformed);
+  TileAddress out;
+  ASSIGN_OR_RETURN(const int64_t level, fields.Int("level", 0, max_level));
+  out.level = static_cast<int>(level);
+  const int64_t side = int64_t{1} << level;
+  uint32_t* coords[3] = {&out.x, &out.y, &out.z};
+  const char* names[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    ASSIGN_OR_RETURN(const int64_t v, fields.Int(names[i], 0, side - 1));
+    *coords[i] = static_cast<uint32_t>(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+StatusOr<DatasetShape> ParseDatasetShape(std::string_view body) {
+  ASSIGN_OR_RETURN(const nlohmann::json json, ParseServerJson(body, "the dataset description"));
+  const JsonFields fields(json, "the dataset description", StatusCode::kMalformed);
+  DatasetShape out;
+  ASSIGN_OR_RETURN(const int64_t tile_depth, fields.Int("tile_depth", 2, 8));
+  ASSIGN_OR_RETURN(const int64_t levels, fields.Int("levels", 1, kMaxDepth - tile_depth + 1));
+  out.tile_depth = static_cast<int>(tile_depth);
+  out.levels = static_cast<int>(levels);
+  ASSIGN_OR_RETURN(out.origin, fields.Vec3("bounds/min"));
+  ASSIGN_OR_RETURN(out.voxel_size, fields.Number("voxel_size"));
+  if (out.voxel_size <= 0) return Malformed("the dataset description's 'voxel_size' is not positive");
+  ASSIGN_OR_RETURN(out.points, fields.UintOr("source/points", std::numeric_limits<uint64_t>::max(), 0));
+  return out;
+}
+
+StatusOr<HierarchyPage> ParseHierarchyPage(std::string_view body, int max_level) {
+  ASSIGN_OR_RETURN(const nlohmann::json json, ParseServerJson(body, "the hierarchy page"));
+  const JsonFields fields(json, "the hierarchy page", StatusCode::kMalformed);
+  HierarchyPage out;
+  ASSIGN_OR_RETURN(const nlohmann::json* tiles, fields.Array("tiles"));
+  for (const nlohmann::json& t : *tiles) {
+    ASSIGN_OR_RETURN(TileAddress address, ParseAddress(t, max_level, "a hierarchy page's tile"));
+    out.tiles.push_back(address);
+  }
+  // The deepest pages have no further pages: the member may be absent there.
+  if (fields.Has("pages")) {
+    ASSIGN_OR_RETURN(const nlohmann::json* pages, fields.Array("pages"));
+    for (const nlohmann::json& p : *pages) {
+      ASSIGN_OR_RETURN(TileAddress address, ParseAddress(p, max_level, "a hierarchy page's page"));
+      out.pages.push_back(address);
+    }
+  }
+  return out;
+}
+
 StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
-                                    const std::function<void(size_t, size_t)>& progress) {
+                                    const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits) {
   ASSIGN_OR_RETURN(const Url url, ParseUrl(dataset_url));
-  ASSIGN_OR_RETURN(std::unique_ptr<Connection> connection, Connection::Open(url.host, url.port));
-  const auto get_json = [&](const std::string& target) -> StatusOr<nlohmann::json> {
-    ASSIGN_OR_RETURN(const Response r, connection->Request("GET", target));
-    if (r.status != 200) return IoError("GET " + target + " answered " + std::to_string(r.status) + ": " + r.body);
-    auto json = nlohmann::json::parse(r.body, nullptr, false);
-    if (json.is_discarded()) return Corrupt("GET " + target + " did not answer JSON");
-    return json;
+  ASSIGN_OR_RETURN(std::unique_ptr<Connection> connection, Connection::Open(url.host, url.port, limits.max_body_bytes));
+  const auto get = [&](const std::string& target) -> StatusOr<Response> {
+    ASSIGN_OR_RETURN(Response r, connection->Request("GET", target));
+    if (r.status != 200) {
+      return IoError("GET " + target + " answered " + std::to_string(r.status) + ": " + r.body.substr(0, 200));
+    }
+    return r;
   };
-  ASSIGN_OR_RETURN(const nlohmann::json meta, get_json(url.target));
-  const int levels = meta.at("levels").get<int>();
-  const int tile_depth = meta.at("tile_depth").get<int>();
+  ASSIGN_OR_RETURN(const Response described, get(url.target));
+  ASSIGN_OR_RETURN(const DatasetShape shape, ParseDatasetShape(described.body));
   FetchedLevel out;
-  out.level = level.value_or(levels - 1);
-  if (out.level < 0 || out.level >= levels) {
-    return InvalidArgument("the dataset has levels 0.." + std::to_string(levels - 1) + ", not " + std::to_string(out.level));
+  out.level = level.value_or(shape.levels - 1);
+  if (out.level < 0 || out.level >= shape.levels) {
+    return InvalidArgument("the dataset has levels 0.." + std::to_string(shape.levels - 1) + ", not " + std::to_string(out.level));
   }
-  // Walk the hierarchy pages down to the wanted level.
-  std::vector<std::array<uint32_t, 3>> keys;
-  std::deque<std::array<uint64_t, 4>> pages = {{0, 0, 0, 0}};
+  // Walk the hierarchy pages down to the wanted level; a server that repeats a page (a cycle) or
+  // never stops is refused by the visited set and the limits.
+  std::set<TileAddress> keys, visited;
+  std::deque<TileAddress> pages = {TileAddress{}};
   while (!pages.empty()) {
-    const auto [l, x, y, z] = pages.front();
+    const TileAddress page = pages.front();
     pages.pop_front();
-    const int depth = std::min(4, out.level - static_cast<int>(l));
-    ASSIGN_OR_RETURN(const nlohmann::json page, get_json(url.target + "/hierarchy/" + std::to_string(l) + "/" + std::to_string(x) + "/" +
-                                                         std::to_string(y) + "/" + std::to_string(z) + "?depth=" + std::to_string(depth)));
-    for (const auto& t : page.at("tiles")) {
-      if (t.at("level").get<int>() == out.level) keys.push_back({t["x"].get<uint32_t>(), t["y"].get<uint32_t>(), t["z"].get<uint32_t>()});
+    if (!visited.insert(page).second) return Malformed("the server lists hierarchy page " + std::to_string(page.level) + "/" +
+                                                       std::to_string(page.x) + "/" + std::to_string(page.y) + "/" +
+                                                       std::to_string(page.z) + " twice");
+    const int depth = std::min(4, out.level - page.level);
+    ASSIGN_OR_RETURN(const Response r, get(url.target + "/hierarchy/" + std::to_string(page.level) + "/" + std::to_string(page.x) +
+                                           "/" + std::to_string(page.y) + "/" + std::to_string(page.z) +
+                                           "?depth=" + std::to_string(depth)));
+    ASSIGN_OR_RETURN(const HierarchyPage parsed, ParseHierarchyPage(r.body, out.level));
+    for (const TileAddress& t : parsed.tiles) {
+      if (t.level == out.level) keys.insert(t);
     }
-    if (static_cast<int>(l) + depth < out.level) {
-      for (const auto& p : page.at("pages")) pages.push_back({p["level"].get<uint64_t>(), p["x"].get<uint64_t>(), p["y"].get<uint64_t>(), p["z"].get<uint64_t>()});
+    if (keys.size() > limits.max_tiles) return ResourceLimit("the level has more than " + std::to_string(limits.max_tiles) + " tiles");
+    if (page.level + depth < out.level) {
+      for (const TileAddress& p : parsed.pages) {
+        if (p.level <= page.level) return Malformed("a hierarchy page lists a page that is not below it");
+        pages.push_back(p);
+        if (pages.size() + visited.size() > limits.max_pages) {
+          return ResourceLimit("the dataset has more than " + std::to_string(limits.max_pages) + " hierarchy pages");
+        }
+      }
     }
   }
-  out.grid.depth = tile_depth + out.level;
-  out.grid.origin = meta.at("bounds").at("min").get<std::array<double, 3>>();
-  out.grid.voxel_size = std::ldexp(meta.at("voxel_size").get<double>(), levels - 1 - out.level);
-  out.grid.points_in = meta.at("source").at("points").get<uint64_t>();
-  std::sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) {
-    return MortonEncode(a[0], a[1], a[2]) < MortonEncode(b[0], b[1], b[2]);
+  out.grid.depth = shape.tile_depth + out.level;
+  out.grid.origin = shape.origin;
+  out.grid.voxel_size = std::ldexp(shape.voxel_size, shape.levels - 1 - out.level);
+  out.grid.points_in = shape.points;
+  std::vector<TileAddress> ordered(keys.begin(), keys.end());
+  std::sort(ordered.begin(), ordered.end(), [](const TileAddress& a, const TileAddress& b) {
+    return MortonEncode(a.x, a.y, a.z) < MortonEncode(b.x, b.y, b.z);
   });
-  for (const auto& [x, y, z] : keys) {
-    const std::string target = url.target + "/tiles/" + std::to_string(out.level) + "/" + std::to_string(x) + "/" +
-                               std::to_string(y) + "/" + std::to_string(z);
-    ASSIGN_OR_RETURN(const Response r, connection->Request("GET", target));
-    if (r.status != 200) return IoError("GET " + target + " answered " + std::to_string(r.status));
+  // A tile is a 2^tile_depth cube: that bounds each decode, whatever its metadata says.
+  DecodeLimits tile_limits;
+  tile_limits.max_voxels = std::min(tile_limits.max_voxels, uint64_t{1} << (3 * shape.tile_depth));
+  for (const TileAddress& key : ordered) {
+    const std::string target = url.target + "/tiles/" + std::to_string(out.level) + "/" + std::to_string(key.x) + "/" +
+                               std::to_string(key.y) + "/" + std::to_string(key.z);
+    ASSIGN_OR_RETURN(const Response r, get(target));
     const std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(r.body.data()), r.body.size());
-    ASSIGN_OR_RETURN(const PdagFile file, ParsePdag(bytes));
-    ASSIGN_OR_RETURN(const DecodedPdag tile, DecodePdag(file));
-    const uint64_t tile_code = MortonEncode(x, y, z) << (3 * tile_depth);
+    const auto decoded = [&]() -> StatusOr<DecodedPdag> {
+      ASSIGN_OR_RETURN(const PdagFile file, ParsePdag(bytes));
+      return DecodePdag(file, tile_limits);
+    }();
+    if (!decoded.ok()) return Status(decoded.status().code(), "tile " + target + ": " + decoded.status().message());
+    const DecodedPdag& tile = *decoded;
+    if (tile.grid.depth != shape.tile_depth) return Corrupt("tile " + target + " is not " + std::to_string(shape.tile_depth) + " levels deep");
+    if (out.tiles > 0 && tile.grid.has_color() != out.grid.has_color()) {
+      return Corrupt("tile " + target + (tile.grid.has_color() ? " has colors and the tiles before it none" : " has no colors and the tiles before it have"));
+    }
+    if (out.grid.morton.size() + tile.grid.morton.size() > limits.max_voxels) {
+      return ResourceLimit("the level holds more than " + std::to_string(limits.max_voxels) + " voxels");
+    }
+    const uint64_t tile_code = MortonEncode(key.x, key.y, key.z) << (3 * shape.tile_depth);
     for (uint64_t local : tile.grid.morton) out.grid.morton.push_back(tile_code | local);
     out.grid.colors.insert(out.grid.colors.end(), tile.grid.colors.begin(), tile.grid.colors.end());
     out.tile_bytes += r.body.size();
     ++out.tiles;
-    if (progress) progress(out.tiles, keys.size());
+    if (progress) progress(out.tiles, ordered.size());
   }
   return out;
 }

@@ -3,6 +3,8 @@
 // the tiles of one level back into voxels.
 #pragma once
 
+#include <array>
+#include <compare>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -10,6 +12,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "pointdag/voxelize/voxelizer.h"
 
@@ -30,9 +34,13 @@ struct Response {
   std::string Header(const std::string& lower_name) const;
 };
 
+// Bodies above it are refused (kResourceLimit) while they are read, not after.
+constexpr uint64_t kDefaultMaxBodyBytes = uint64_t{1} << 30;
+
 class Connection {
  public:
-  static StatusOr<std::unique_ptr<Connection>> Open(const std::string& host, uint16_t port);
+  static StatusOr<std::unique_ptr<Connection>> Open(const std::string& host, uint16_t port,
+                                                    uint64_t max_body_bytes = kDefaultMaxBodyBytes);
   ~Connection();
   StatusOr<Response> Request(const std::string& method, const std::string& target,
                              const std::map<std::string, std::string>& headers = {}, const std::string& body = "");
@@ -46,6 +54,38 @@ class Connection {
   std::unique_ptr<Impl> impl_;
 };
 
+// ---- What a server says, parsed as untrusted input: every number is range-checked. ----
+
+struct DatasetShape {
+  int levels = 0;      // 1..20
+  int tile_depth = 0;  // 2..8, and levels - 1 + tile_depth <= 21
+  std::array<double, 3> origin{};  // bounds.min
+  double voxel_size = 0;           // finest level, > 0
+  uint64_t points = 0;
+};
+// The members of GET /v1/datasets/{id} that FetchDataset needs (proto/PROTOCOL.md §2).
+StatusOr<DatasetShape> ParseDatasetShape(std::string_view body);
+
+struct TileAddress {
+  int level = 0;
+  uint32_t x = 0, y = 0, z = 0;  // each < 2^level
+  auto operator<=>(const TileAddress&) const = default;
+};
+struct HierarchyPage {
+  std::vector<TileAddress> tiles;
+  std::vector<TileAddress> pages;
+};
+// GET /v1/datasets/{id}/hierarchy/... (§3); addresses deeper than `max_level` are refused.
+StatusOr<HierarchyPage> ParseHierarchyPage(std::string_view body, int max_level);
+
+// What a fetch may cost, whatever the server answers.
+struct FetchLimits {
+  uint64_t max_body_bytes = uint64_t{256} << 20;  // one JSON answer or tile
+  size_t max_pages = 100000;                      // hierarchy pages walked
+  size_t max_tiles = 1000000;
+  uint64_t max_voxels = uint64_t{1} << 28;        // all tiles together
+};
+
 struct FetchedLevel {
   int level = 0;
   size_t tiles = 0;
@@ -55,6 +95,7 @@ struct FetchedLevel {
 
 // `dataset_url`: http://HOST:PORT/v1/datasets/{id}. Level: the finest when not given.
 StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
-                                    const std::function<void(size_t done, size_t total)>& progress = {});
+                                    const std::function<void(size_t done, size_t total)>& progress = {},
+                                    const FetchLimits& limits = {});
 
 }  // namespace pointdag::client
