@@ -3,9 +3,6 @@
 #include <cmath>
 #include <limits>
 
-#include "pointdag/container/pdag_file.h"
-#include "pointdag/json_text.h"
-#include "pointdag/pipeline.h"
 #include "pointdag/read/scan_reader.h"
 #include "test_util.h"
 
@@ -404,120 +401,6 @@ TEST(PclReader, TruncatedBinaryPcdIsAnError) {
                     "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 100\nDATA binary\n" + std::string(40, '\0');
   WriteText(dir / "cut.pcd", bin);
   EXPECT_FALSE(OpenScan(dir / "cut.pcd").ok());
-}
-
-
-// ---- text from LAS records that is not UTF-8 ----
-
-// One LASF_Projection VLR: 54-byte header, then the payload.
-std::vector<uint8_t> ProjectionVlr(uint16_t record_id, const std::vector<uint8_t>& payload) {
-  std::vector<uint8_t> vlr;
-  AppendLE<uint16_t>(vlr, 0);
-  const char user[16] = "LASF_Projection";
-  vlr.insert(vlr.end(), user, user + 16);
-  AppendLE<uint16_t>(vlr, record_id);
-  AppendLE<uint16_t>(vlr, static_cast<uint16_t>(payload.size()));
-  vlr.resize(vlr.size() + 32, 0);
-  vlr.insert(vlr.end(), payload.begin(), payload.end());
-  return vlr;
-}
-
-// A LAS 1.2 file of `points` with `vlrs` between its header and its points, at Autzen's
-// coordinates (EPSG:2994, feet) so that georeferencing succeeds.
-std::vector<uint8_t> LasWithVlrs(const std::vector<std::vector<uint8_t>>& vlrs) {
-  LasSpec spec;
-  spec.minor = 2;
-  spec.format = 3;
-  std::vector<uint8_t> las = MakeLas(spec, testing::RandomLasPoints(200, 3));
-  const double offsets[3] = {636500.0, 849200.0, 450.0};
-  std::memcpy(las.data() + 155, offsets, sizeof(offsets));
-  std::vector<uint8_t> all;
-  for (const auto& v : vlrs) all.insert(all.end(), v.begin(), v.end());
-  las.insert(las.begin() + 227, all.begin(), all.end());
-  const uint32_t point_offset = static_cast<uint32_t>(227 + all.size());
-  const uint32_t count = static_cast<uint32_t>(vlrs.size());
-  std::memcpy(las.data() + 96, &point_offset, 4);
-  std::memcpy(las.data() + 100, &count, 4);
-  return las;
-}
-
-bool IsValidUtf8(std::string_view s) {
-  for (size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    const size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    if (n == 0 || i + n > s.size()) return false;
-    for (size_t k = 1; k < n; ++k) {
-      if ((static_cast<unsigned char>(s[i + k]) & 0xC0) != 0x80) return false;
-    }
-    i += n;
-  }
-  return true;
-}
-
-// The whole encode, as the daemon's worker runs it, must end in a Status, and the metadata it
-// writes must be valid UTF-8 (the raw bytes in JSON used to throw in dump() and kill the daemon).
-StatusOr<nlohmann::json> EncodeAndReadBackMeta(const std::filesystem::path& las) {
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  options.georeference = true;
-  StatusOr<EncodedScan> encoded = Internal("EncodeScan threw");
-  EXPECT_NO_THROW(encoded = EncodeScan(las, options));
-  if (!encoded.ok()) return encoded.status();
-  std::vector<uint8_t> bytes;
-  EXPECT_NO_THROW(bytes = SerializePdag(encoded->file));
-  EXPECT_TRUE(IsValidUtf8(DumpJson(encoded->file.meta)));
-  ASSIGN_OR_RETURN(PdagFile file, ParsePdag(bytes));  // ParseJson refuses invalid UTF-8
-  return file.meta;
-}
-
-TEST(LasText, GeoKeyAsciiRecordWithInvalidUtf8IsEncodedWithValidMetadata) {
-  ScratchDir dir;
-  const std::string citation = "NAD83 / Oregon GIC Lambert (ft) \xFF\xFE\xC3(|";
-  std::vector<uint8_t> directory;
-  const auto put = [&](std::initializer_list<uint16_t> words) {
-    for (uint16_t w : words) AppendLE<uint16_t>(directory, w);
-  };
-  put({1, 1, 0, 3});        // directory version 1.1.0, 3 keys
-  put({1024, 0, 1, 1});     // GTModelTypeGeoKey: projected
-  put({1026, 34737, static_cast<uint16_t>(citation.size()), 0});  // GTCitationGeoKey in the ASCII record
-  put({3072, 0, 1, 2994});  // ProjectedCSTypeGeoKey: EPSG:2994
-  WriteBytes(dir / "geokeys.las",
-             LasWithVlrs({ProjectionVlr(34735, directory),
-                          ProjectionVlr(34737, std::vector<uint8_t>(citation.begin(), citation.end()))}));
-  auto reader = OpenScan(dir / "geokeys.las");
-  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
-  EXPECT_EQ((*reader)->info().geokeys->ascii, citation);  // the reader keeps the bytes as stored
-
-  auto meta = EncodeAndReadBackMeta(dir / "geokeys.las");
-  ASSERT_TRUE(meta.ok()) << meta.status().ToString();
-  const std::string ascii = (*meta)["crs"]["geokeys"]["ascii"].get<std::string>();
-  EXPECT_TRUE(IsValidUtf8(ascii));
-  EXPECT_NE(ascii.find("NAD83 / Oregon GIC Lambert (ft) "), std::string::npos) << ascii;
-  EXPECT_EQ((*meta)["crs"]["epsg"], 2994);
-}
-
-TEST(LasText, WktRecordWithInvalidUtf8IsEncodedWithValidMetadata) {
-  ScratchDir dir;
-  const std::string wkt =
-      "PROJCS[\"NAD83(HARN) / Oregon GIC Lambert (ft) \xFF\xC0\",GEOGCS[\"NAD83(HARN)\",DATUM[\"NAD83_HARN\","
-      "SPHEROID[\"GRS 1980\",6378137,298.257222101]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433]],"
-      "PROJECTION[\"Lambert_Conformal_Conic_2SP\"],PARAMETER[\"standard_parallel_1\",43],"
-      "PARAMETER[\"standard_parallel_2\",45.5],PARAMETER[\"latitude_of_origin\",41.75],"
-      "PARAMETER[\"central_meridian\",-120.5],PARAMETER[\"false_easting\",1312335.958],"
-      "PARAMETER[\"false_northing\",0],UNIT[\"foot\",0.3048]]";
-  std::vector<uint8_t> payload(wkt.begin(), wkt.end());
-  payload.push_back(0);
-  WriteBytes(dir / "wkt.las", LasWithVlrs({ProjectionVlr(2112, payload)}));
-  auto reader = OpenScan(dir / "wkt.las");
-  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
-  EXPECT_EQ((*reader)->info().crs_wkt, wkt);
-
-  // PROJ takes the WKT (the bad bytes are only in a name); the metadata carries it as valid UTF-8.
-  auto meta = EncodeAndReadBackMeta(dir / "wkt.las");
-  ASSERT_TRUE(meta.ok()) << meta.status().ToString();
-  const std::string stored = (*meta)["crs"]["wkt"].get<std::string>();
-  EXPECT_TRUE(IsValidUtf8(stored));
-  EXPECT_NE(stored.find("Lambert_Conformal_Conic_2SP"), std::string::npos);
 }
 
 }  // namespace
