@@ -297,6 +297,19 @@ TEST(HostilePly, ObjInfoGridMustMatchTheVertices) {
   EXPECT_EQ((*reader)->info().point_count, 2u);
 }
 
+// Found by the ply fuzzer: PCL writes the packed color when it reads blue, at red's place; with no
+// red (here "r`d") it wrote past the point and aborted on an assertion (fuzz/regressions/ply/).
+TEST(HostilePly, UcharBlueWithoutRedIsRefused) {
+  const std::string head = "ply\nformat binary_little_endian 1.0\nelement vertex 1\n" + kXyzPlyProps;
+  const std::string point = Floats({1, 2, 3}) + "\x01\x02\x03";
+  ExpectRefused("c.ply", head + "property uchar r`d\nproperty uchar green\nproperty uchar blue\nend_header\n" + point,
+                StatusCode::kUnsupported, "uchar vertex colors must be one red, green, blue set with red before blue");
+  ExpectRefused("c.ply", head + "property uchar blue\nproperty uchar green\nproperty uchar red\nend_header\n" + point,
+                StatusCode::kUnsupported, "PLY header line 7: uchar vertex colors must be one red, green, blue set");
+  ExpectRefused("c.ply", head + "property uchar red\nproperty uchar green\nend_header\n" + point.substr(0, 14),
+                StatusCode::kUnsupported, "PLY uchar vertex colors must be one red, green, blue set");
+}
+
 // A one-byte property named rgb is no packed color; reading it as 4 bytes ran past the last point.
 TEST(HostilePly, OneByteRgbPropertyIsNotAPackedColor) {
   ScratchDir dir;

@@ -165,9 +165,24 @@ class PlyHeaderParser {
     } else {
       const size_t size = ScalarSize(t[1]);
       if (size == 0) return Malformed(where_ + ": unknown PLY type " + Quote(t[1]));
+      if (e.name == "vertex" && (t[1] == "uchar" || t[1] == "uint8")) RETURN_IF_ERROR(CheckColorOrder(name));
       e.min_record_bytes += size;
     }
     e.properties.emplace_back(name);
+    return Status::Ok();
+  }
+
+  // PCL packs uchar red, green and blue into one 4-byte rgb field, declared at red and written when
+  // it reads blue: a blue without a red before it, or a second red or blue, makes PCL write past
+  // the point and abort on an assertion (Debian's PCL keeps them).
+  Status CheckColorOrder(std::string_view name) {
+    const bool red = name == "red" || name == "diffuse_red";
+    const bool blue = name == "blue" || name == "diffuse_blue";
+    if ((red && uchar_reds_ > 0) || (blue && (uchar_reds_ == 0 || uchar_blues_ > 0))) {
+      return Unsupported(where_ + ": uchar vertex colors must be one red, green, blue set with red before blue");
+    }
+    uchar_reds_ += red;
+    uchar_blues_ += blue;
     return Status::Ok();
   }
 
@@ -182,6 +197,9 @@ class PlyHeaderParser {
       if (std::find(vertex->properties.begin(), vertex->properties.end(), axis) == vertex->properties.end()) {
         return Malformed(std::string("PLY vertex element has no '") + axis + "' property");
       }
+    }
+    if (uchar_reds_ != uchar_blues_) {
+      return Unsupported("PLY uchar vertex colors must be one red, green, blue set with red before blue");
     }
     if (vertex->count == 0) return Malformed("PLY header declares zero vertices");
     if (uint64_t{grid_width_} * grid_height_ != vertex->count) {
@@ -227,6 +245,7 @@ class PlyHeaderParser {
   std::string encoding_;
   std::vector<Element> elements_;
   uint32_t grid_width_ = 0, grid_height_ = 0;  // what PCL will size the cloud by
+  int uchar_reds_ = 0, uchar_blues_ = 0;
   size_t body_offset_ = 0;
 };
 
