@@ -361,5 +361,129 @@ TEST(Daemon, RefusesToStartOnAnUnknownDevice) {
   std::filesystem::remove(dir.string() + ".log");
 }
 
+// Runs one SQL statement on a store file the way another process would; false when SQLite refuses.
+bool ExecSql(const std::filesystem::path& store, const std::string& sql) {
+  sqlite3* db = nullptr;
+  const bool ok = sqlite3_open_v2(store.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK &&
+                  sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr) == SQLITE_OK;
+  sqlite3_close(db);
+  return ok;
+}
+
+// Waits until the daemon's store says the job is running (its attempt is counted then).
+void WaitUntilRunning(Connection& c, const std::string& location) {
+  for (int i = 0; i < 1000; ++i) {
+    if (Json(*c.Request("GET", location))["status"] == "running") return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  FAIL() << location << " never ran";
+}
+
+// A job whose run throws (here: parameters of the wrong type in its stored row, as a damaged or
+// foreign store holds them) ends failed with the exception's text; the daemon keeps serving.
+TEST(ServerJobs, AJobThatThrowsEndsFailedAndTheDaemonLives) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  daemon.Stop(SIGTERM);
+  const auto upload = scratch.path() / "var" / "uploads" / "thrower.upload";
+  std::filesystem::copy_file(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", upload);
+  ASSERT_TRUE(ExecSql(daemon.store(),
+                      "INSERT INTO jobs (id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, "
+                      "params, created, updated) VALUES ('00000000000000aa', 'queued', 'queued', 0, 0, 0, '', '', '" +
+                          upload.string() + "', '{\"name\": \"x\", \"voxel\": \"ten\"}', 0, 0)"));
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  const nlohmann::json job = WaitForJob(*c, "/v1/jobs/00000000000000aa");
+  EXPECT_EQ(job["status"], "failed") << job.dump();
+  EXPECT_NE(job.value("error", "").find("Internal: the job threw an exception: [json.exception.type_error.302]"), std::string::npos)
+      << job.dump();
+  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+  EXPECT_FALSE(std::filesystem::exists(upload));
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs WHERE id = '00000000000000aa'"), 1);
+}
+
+// A job that takes the process down (here: kill -9 while it runs) is run again once, then failed:
+// the daemon no longer dies after every restart.
+TEST(ServerJobs, AJobInterruptedTwiceIsNotResumedAThirdTime) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const std::string location = r->Header("location");
+  for (int crash = 1; crash <= 2; ++crash) {
+    WaitUntilRunning(*c, location);
+    daemon.Stop(SIGKILL);
+    EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs"), crash);
+    ASSERT_NO_FATAL_FAILURE(daemon.Start());
+    c = daemon.Connect();
+    ASSERT_NE(c, nullptr);
+  }
+  const nlohmann::json job = WaitForJob(*c, location);
+  EXPECT_EQ(job["status"], "failed") << job.dump();
+  EXPECT_EQ(job["error"], "interrupted 2 times (the daemon stopped or crashed while running it); not retried");
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs"), 2);
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 0);
+  EXPECT_TRUE(std::filesystem::is_empty(scratch.path() / "var" / "uploads"));
+  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+}
+
+// A store written before jobs.attempts existed opens, keeps its jobs and gains the column.
+TEST(ServerJobs, AStoreWithoutTheAttemptsColumnIsMigrated) {
+  testing::ScratchDir scratch;
+  std::filesystem::create_directories(scratch.path() / "var");
+  const auto store = scratch.path() / "var" / "store.sqlite";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(store.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "CREATE TABLE jobs (id TEXT PRIMARY KEY, state TEXT NOT NULL, stage TEXT NOT NULL, percent REAL NOT "
+                         "NULL, points_in INTEGER NOT NULL, voxels_out INTEGER NOT NULL, dataset_id TEXT NOT NULL, error TEXT "
+                         "NOT NULL, upload_path TEXT NOT NULL, params TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL);"
+                         "INSERT INTO jobs VALUES ('00000000000000bb', 'failed', 'survey', 5, 0, 0, '', 'old reason', '', '{}', 1, 2);",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  const nlohmann::json job = Json(*c->Request("GET", "/v1/jobs/00000000000000bb"));
+  EXPECT_EQ(job["status"], "failed");
+  EXPECT_EQ(job["error"], "old reason");
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs WHERE id = '00000000000000bb'"), 0);
+}
+
+// Invalid UTF-8 in the name: a valid JSON answer (U+FFFD in place of the byte), and a dataset.
+TEST_F(ServerTest, InvalidUtf8InTheNameGivesValidJson) {
+  SKIP_WITHOUT_DATA();
+  auto c = daemon_->Connect();
+  auto r = c->Upload("/v1/datasets?name=a%FFb&voxel=10", testing::DataDir() / "tiny_1.2-with-color_1065pts.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const nlohmann::json accepted = Json(*r);
+  ASSERT_FALSE(accepted.is_discarded()) << r->body;
+  EXPECT_EQ(accepted["params"]["name"], "a\xEF\xBF\xBD" "b");
+  const nlohmann::json job = WaitForJob(*c, r->Header("location"));
+  ASSERT_EQ(job["status"], "done") << job.dump();
+  EXPECT_EQ(Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()))["name"], "a\xEF\xBF\xBD" "b");
+}
+
+// If-None-Match: a `*` inside a tag is not the wildcard; `Bearer` in any case is the scheme.
+TEST_F(ServerTest, StarInsideATagIsNoWildcardAndBearerIsCaseInsensitive) {
+  SKIP_WITHOUT_DATA();
+  const nlohmann::json meta = Ingest(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", "name=star&voxel=10");
+  ASSERT_FALSE(meta.is_null());
+  auto c = daemon_->Connect();
+  const std::string dataset = "/v1/datasets/" + meta["id"].get<std::string>();
+  EXPECT_EQ(c->Request("GET", dataset + "/tiles/0/0/0/0", {{"If-None-Match", "\"a*b\""}})->status, 200);
+  EXPECT_EQ(c->Request("GET", dataset + "/tiles/0/0/0/0", {{"If-None-Match", "*"}})->status, 304);
+  EXPECT_EQ(c->Request("DELETE", dataset, {{"Authorization", std::string("bearer ") + kToken}})->status, 204);
+}
+
 }  // namespace
 }  // namespace pointdag
