@@ -13,6 +13,7 @@
 #include "daemon_util.h"
 #include "pointdag/color/color_metrics.h"
 #include "pointdag/pipeline.h"
+#include "store_util.h"
 #include "test_util.h"
 
 namespace pointdag {
@@ -294,14 +295,7 @@ TEST(Daemon, RefusesToStartOnAnUnknownDevice) {
   std::filesystem::remove(dir.string() + ".log");
 }
 
-// Runs one SQL statement on a store file the way another process would; false when SQLite refuses.
-bool ExecSql(const std::filesystem::path& store, const std::string& sql) {
-  sqlite3* db = nullptr;
-  const bool ok = sqlite3_open_v2(store.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK &&
-                  sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr) == SQLITE_OK;
-  sqlite3_close(db);
-  return ok;
-}
+using testing::ExecSql;
 
 // Waits until the daemon's store says the job is running (its attempt is counted then).
 void WaitUntilRunning(Connection& c, const std::string& location) {
