@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <set>
+#include <thread>
 
 #include "pointdag/ingest.h"
 
@@ -77,18 +79,39 @@ JobQueue::~JobQueue() {
 }
 
 void JobQueue::Resume() {
-  for (const JobRecord& job : store_.JobsInStates({"running", "queued"})) {
-    if (!std::filesystem::exists(job.upload_path)) {
-      (void)store_.SetJobState(job.id, "failed", "the daemon stopped during this job and its upload is gone");
+  auto jobs = store_.JobsInStates({"running", "queued"});
+  if (!jobs.ok()) {
+    spdlog::error("cannot resume the jobs of a previous run: {}", jobs.status().ToString());
+    return;
+  }
+  std::set<std::filesystem::path> referenced;
+  for (const JobRecord& job : *jobs) {
+    if (job.attempts >= std::max(1, limits_.max_attempts)) {
+      Fail(job.id, "interrupted " + std::to_string(job.attempts) +
+                       " times (the daemon stopped or crashed while running it); not retried", job.upload_path);
       continue;
     }
+    if (!std::filesystem::exists(job.upload_path)) {
+      Fail(job.id, "the daemon stopped during this job and its upload is gone", job.upload_path);
+      continue;
+    }
+    referenced.insert(job.upload_path);
     (void)store_.UpdateJobProgress(job.id, "resumed", 0, 0, 0);
     (void)store_.SetJobState(job.id, "queued");
-    spdlog::info("job {}: resumed after a restart", job.id);
+    spdlog::info("job {}: resumed after a restart (started {} time(s) before)", job.id, job.attempts);
     std::lock_guard lock(mutex_);
     queue_.push_back(job.id);
   }
   wake_.notify_all();
+  // Uploads a crash cut short (or left between the body and its job) belong to no job.
+  std::error_code ec;
+  if (limits_.upload_dir.empty()) return;
+  for (const auto& entry : std::filesystem::directory_iterator(limits_.upload_dir, ec)) {
+    if (referenced.count(entry.path())) continue;
+    std::error_code ignored;
+    std::filesystem::remove(entry.path(), ignored);
+    spdlog::info("removed {}: an upload no job references", entry.path().string());
+  }
 }
 
 bool JobQueue::Submit(const std::string& job_id) {
@@ -111,28 +134,74 @@ size_t JobQueue::waiting() const {
   return queue_.size();
 }
 
+std::optional<PendingEnd> JobQueue::Pending(const std::string& job_id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = pending_.find(job_id);
+  return it == pending_.end() ? std::nullopt : std::optional<PendingEnd>(it->second);
+}
+
 void JobQueue::Work() {
+  constexpr auto kRetryPending = std::chrono::seconds(1);
+  bool all_written = true;
   for (;;) {
     std::string id;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      const auto ready = [this] { return stopping_ || !queue_.empty(); };
+      if (all_written) {
+        wake_.wait(lock, ready);
+      } else if (!wake_.wait_for(lock, kRetryPending, ready)) {
+        lock.unlock();
+        all_written = FlushPending();
+        continue;
+      }
       if (stopping_) return;
       id = queue_.front();
       queue_.pop_front();
       ++running_;
     }
     Run(id);
+    all_written = FlushPending();
     std::lock_guard lock(mutex_);
     --running_;
   }
 }
 
 void JobQueue::Run(const std::string& job_id) {
-  const auto job = store_.GetJob(job_id);
-  if (!job) return;
+  auto job = store_.GetJob(job_id);
+  if (!job.ok() || !*job) {
+    // Nothing is known of the job but its id: it stays as the store has it (resumed at the next start).
+    spdlog::error("job {}: cannot read it from the store: {}", job_id, job.ok() ? "gone" : job.status().ToString());
+    return;
+  }
+  if (const Status s = store_.StartAttempt(job_id); !s.ok()) {
+    // Running it uncounted could crash the process again and again; refuse instead.
+    Fail(job_id, "cannot record the job's start in the store: " + s.ToString(), (*job)->upload_path);
+    return;
+  }
+  std::string reason;
+  // The one place a job's exceptions end (also those carried out of the tiler's parallel loops).
+  try {
+    reason = Ingest(**job);
+  } catch (const std::bad_alloc&) {
+    reason = "Internal: the job ran out of memory (std::bad_alloc)";
+  } catch (const std::exception& e) {
+    reason = std::string("Internal: the job threw an exception: ") + e.what();
+  } catch (...) {
+    reason = "Internal: the job threw an unknown exception";
+  }
+  if (!reason.empty()) {
+    Fail(job_id, reason, (*job)->upload_path);
+    return;
+  }
+  std::error_code ignored;
+  std::filesystem::remove((*job)->upload_path, ignored);  // the dataset and the done state are durable
+}
+
+std::string JobQueue::Ingest(const JobRecord& job) {
+  const std::string& job_id = job.id;
   IngestOptions options;
-  const auto& p = job->params;
+  const auto& p = job.params;
   if (p.contains("voxel")) options.voxel_size = p["voxel"].get<double>();
   if (p.contains("epsg")) options.epsg = p["epsg"].get<int>();
   if (p.contains("quality")) options.quality_db = p["quality"].get<double>();
@@ -149,27 +218,55 @@ void JobQueue::Run(const std::string& job_id) {
     last_stage = stage;
     (void)store_.UpdateJobProgress(job_id, std::string(stage), percent, 0, 0);
   };
-  (void)store_.UpdateJobProgress(job_id, "survey", 0, 0, 0);
-  spdlog::info("job {}: ingesting {}", job_id, job->upload_path);
-  auto scan = IngestScan(job->upload_path, options);
-  Status status = scan.status();
-  if (status.ok()) {
-    (void)store_.UpdateJobProgress(job_id, "store", 97, scan->grid.points_in, scan->grid.morton.size());
-    const std::string dataset_id = NewId();
-    const std::string name = p.value("name", std::string("scan"));
-    status = store_.CommitDataset(job_id, dataset_id, name, DescribeDataset(dataset_id, name, *scan), scan->tiles);
-    if (status.ok()) {
-      metrics_.CountIngest(scan->grid.points_in, scan->seconds);
-      spdlog::info("job {}: dataset {} ({} points, {} voxels, {} tiles, {:.2f} s)", job_id, dataset_id,
-                   scan->grid.points_in, scan->grid.morton.size(), scan->tiles.tiles.size(), scan->seconds);
-    }
+  spdlog::info("job {}: ingesting {} (attempt {})", job_id, job.upload_path, job.attempts + 1);
+  auto scan = IngestScan(job.upload_path, options);
+  if (!scan.ok()) return scan.status().ToString();
+  (void)store_.UpdateJobProgress(job_id, "store", 97, scan->grid.points_in, scan->grid.morton.size());
+  const std::string dataset_id = NewId();
+  const std::string name = p.value("name", std::string("scan"));
+  const Status status = store_.CommitDataset(job_id, dataset_id, name, DescribeDataset(dataset_id, name, *scan), scan->tiles);
+  if (!status.ok()) return "the dataset could not be stored: " + status.ToString();
+  metrics_.CountIngest(scan->grid.points_in, scan->seconds);
+  spdlog::info("job {}: dataset {} ({} points, {} voxels, {} tiles, {:.2f} s)", job_id, dataset_id, scan->grid.points_in,
+               scan->grid.morton.size(), scan->tiles.tiles.size(), scan->seconds);
+  return "";
+}
+
+void JobQueue::Fail(const std::string& job_id, const std::string& reason, const std::string& upload_path) {
+  spdlog::warn("job {}: failed: {}", job_id, reason);
+  constexpr int kTries = 3;
+  Status written;
+  for (int attempt = 0; attempt < kTries; ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(200 * attempt));
+    written = store_.SetJobState(job_id, "failed", reason);
+    if (written.ok()) break;
   }
-  if (!status.ok()) {
-    spdlog::warn("job {}: failed: {}", job_id, status.ToString());
-    (void)store_.SetJobState(job_id, "failed", status.ToString());
+  if (written.ok()) {
+    std::error_code ignored;
+    std::filesystem::remove(upload_path, ignored);
+    return;
   }
-  std::error_code ignored;
-  std::filesystem::remove(job->upload_path, ignored);
+  spdlog::error("job {}: cannot record its failure ({}); kept in memory, written at the next chance", job_id, written.ToString());
+  std::lock_guard lock(mutex_);
+  pending_[job_id] = {"failed", reason, upload_path};
+}
+
+bool JobQueue::FlushPending() {
+  std::map<std::string, PendingEnd> pending;
+  {
+    std::lock_guard lock(mutex_);
+    pending = pending_;
+  }
+  for (const auto& [id, end] : pending) {
+    if (!store_.SetJobState(id, end.state, end.error).ok()) continue;
+    std::error_code ignored;
+    std::filesystem::remove(end.upload_path, ignored);
+    spdlog::info("job {}: its failure is recorded now", id);
+    std::lock_guard lock(mutex_);
+    pending_.erase(id);
+  }
+  std::lock_guard lock(mutex_);
+  return pending_.empty();
 }
 
 }  // namespace pointdag::server

@@ -3,14 +3,24 @@
 // Contract: Submit() refuses (returns false) when `capacity` jobs are already waiting. A job runs
 // IngestScan on its upload, then commits the dataset, its tiles and the job's "done" state in one
 // transaction; on failure the job is "failed" with the reason and nothing of the dataset exists.
-// The upload file is removed once its job has ended either way. On start, jobs a previous process
-// left queued or running are run again from their upload (state "queued", stage "resumed"), or
-// failed when the upload is gone.
+// The upload file is removed once its job's end state is durable in the store, never before. A job
+// that throws (a bug, bad_alloc) is failed with the reason; nothing a job does takes the process
+// down by an exception. When the end state cannot be written (disk full, the store locked by
+// another process), it is retried, then kept in memory — PendingEnd() reports it — and written at
+// the next chance; until then the upload stays, so a restart runs the job again.
+//
+// On start, Resume() runs again the jobs a previous process left queued or running, from their
+// upload (state "queued", stage "resumed"); it fails those whose upload is gone and those already
+// started `max_attempts` times (each start is counted in the store before the job runs, so a run
+// that crashed the process counts), and removes uploads no such job references (left by a crash
+// mid-upload).
 #pragma once
 
 #include <condition_variable>
 #include <deque>
+#include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -24,8 +34,16 @@ struct JobLimits {
   int workers = 1;
   size_t capacity = 16;
   std::filesystem::path spill_dir;
+  std::filesystem::path upload_dir;  // swept of unreferenced files by Resume(); empty: not swept
   uint64_t max_points_in_memory = uint64_t{1} << 25;
   int max_attempts = 2;  // a job that failed or took the process down this often is not resumed again
+};
+
+// A job's end the store has not recorded yet.
+struct PendingEnd {
+  std::string state;  // "failed"
+  std::string error;
+  std::string upload_path;  // removed once the end is durable
 };
 
 class JobQueue {
@@ -37,10 +55,18 @@ class JobQueue {
   size_t waiting() const;
   bool full() const { return waiting() >= limits_.capacity; }
   size_t running() const;
+  // The end of a job that the store could not record yet, if any: the truth about that job.
+  std::optional<PendingEnd> Pending(const std::string& job_id) const;
 
  private:
   void Work();
   void Run(const std::string& job_id);
+  // Ingests and commits; a failure's reason, or "" when the dataset is committed.
+  std::string Ingest(const JobRecord& job);
+  // Records a failed end (retried; kept in memory when the store refuses) and removes the upload once durable.
+  void Fail(const std::string& job_id, const std::string& reason, const std::string& upload_path);
+  // Writes the ends kept in memory; true when none is left.
+  bool FlushPending();
   Store& store_;
   Metrics& metrics_;
   JobLimits limits_;
@@ -49,6 +75,7 @@ class JobQueue {
   std::deque<std::string> queue_;
   size_t running_ = 0;
   bool stopping_ = false;
+  std::map<std::string, PendingEnd> pending_;
   std::vector<std::thread> workers_;
 };
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "check.h"
 #include "config.h"
 #include "pointdag/gpu/stage_device.h"
 #include "pointdag/pipeline.h"
@@ -20,12 +21,14 @@ int main(int argc, char** argv) {
   CLI::App app{"pointdagd: upload scans over HTTP, serve tiled LOD SVDAGs"};
   std::string config_file, listen, data_dir, token, port_file;
   int workers = 0;
+  bool check = false;
   app.add_option("--config", config_file, "TOML configuration (configs/pointdagd.toml)");
   app.add_option("--listen", listen, "HOST:PORT (port 0: any free port)");
   app.add_option("--data-dir", data_dir, "where the store, uploads and spill files live");
   app.add_option("--token", token, "bearer token required for writes");
   app.add_option("--workers", workers, "concurrent ingest jobs")->check(CLI::Range(1, 64));
   app.add_option("--port-file", port_file, "write the bound port here once listening");
+  app.add_flag("--check", check, "check the store in --data-dir and exit: 0 consistent, 1 with a report");
   CLI11_PARSE(app, argc, argv);
 
   DaemonConfig config;
@@ -46,6 +49,12 @@ int main(int argc, char** argv) {
   if (workers > 0) config.workers = workers;
   if (!port_file.empty()) config.port_file = port_file;
   spdlog::set_level(spdlog::level::from_str(config.log_level));
+  if (check) {
+    const auto report = CheckDataDir(config.data_dir);
+    if (!report.ok()) std::fprintf(stderr, "pointdagd: %s\n", report.status().ToString().c_str());
+    if (report.ok()) std::printf("%s", report->ToString().c_str());
+    return report.ok() && report->ok() ? 0 : 1;
+  }
 
   std::error_code ec;
   std::filesystem::create_directories(config.data_dir / "uploads", ec);
@@ -75,6 +84,7 @@ int main(int argc, char** argv) {
   limits.workers = config.workers;
   limits.capacity = config.queue_size;
   limits.spill_dir = config.data_dir / "spill";
+  limits.upload_dir = config.data_dir / "uploads";
   JobQueue jobs(**store, metrics, limits);
   ServiceConfig service_config;
   service_config.token = config.token;

@@ -35,6 +35,11 @@ void Metrics::CountIngest(uint64_t points, double seconds) {
   if (seconds > 0) last_ingest_points_per_s_ = static_cast<double>(points) / seconds;
 }
 
+void Metrics::CountCorruptTile() {
+  std::lock_guard lock(mutex_);
+  ++corrupt_tiles_;
+}
+
 void Metrics::SetStageDevices(std::vector<StageDevice> stages) {
   std::lock_guard lock(mutex_);
   stages_ = std::move(stages);
@@ -64,6 +69,9 @@ std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state
   out << "# HELP pointdag_http_response_bytes_total Response body bytes sent.\n"
       << "# TYPE pointdag_http_response_bytes_total counter\n"
       << "pointdag_http_response_bytes_total " << bytes_served_ << "\n"
+      << "# HELP pointdag_corrupt_tiles_total Tile reads refused because the stored bytes do not match their checksum.\n"
+      << "# TYPE pointdag_corrupt_tiles_total counter\n"
+      << "pointdag_corrupt_tiles_total " << corrupt_tiles_ << "\n"
       << "# HELP pointdag_jobs Ingest jobs by state.\n# TYPE pointdag_jobs gauge\n";
   for (const auto& [state, n] : jobs_by_state) out << "pointdag_jobs{state=\"" << state << "\"} " << n << "\n";
   out << "# HELP pointdag_ingest_points_total Input points of finished ingests.\n# TYPE pointdag_ingest_points_total counter\n"

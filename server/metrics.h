@@ -16,6 +16,8 @@ class Metrics {
  public:
   void CountRequest(const std::string& route, int status, double seconds, uint64_t body_bytes);
   void CountIngest(uint64_t points, double seconds);
+  // A tile whose stored bytes no longer match their checksum (answered 500, never served).
+  void CountCorruptTile();
   // Where each heavy stage runs, decided at start: stage -> device ("cpu" or a Vulkan device's name),
   // with the calibration's seconds per path where it was measured.
   struct StageDevice {
@@ -32,6 +34,7 @@ class Metrics {
   std::map<std::string, std::array<uint64_t, kBuckets.size() + 1>> latency_;  // per route; last = +Inf
   std::map<std::string, double> latency_sum_;
   uint64_t bytes_served_ = 0;
+  uint64_t corrupt_tiles_ = 0;
   uint64_t ingest_points_ = 0;
   double ingest_seconds_ = 0;
   double last_ingest_points_per_s_ = 0;

@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 
+#include <spdlog/spdlog.h>
+
 #include "pointdag/json_text.h"
 #include "pointdag/read/scan_reader.h"
 
@@ -41,7 +43,9 @@ std::optional<TileKey> ParseTileKey(const std::vector<std::string>& parts, size_
 }
 
 bool EtagMatches(const std::string& if_none_match, const std::string& etag) {
-  if (if_none_match.find('*') != std::string::npos) return true;
+  // "*" matches any tag only as the whole field value (RFC 9110 13.1.2), never inside a tag.
+  const size_t first = if_none_match.find_first_not_of(" \t"), last = if_none_match.find_last_not_of(" \t");
+  if (first != std::string::npos && if_none_match.substr(first, last - first + 1) == "*") return true;
   // A list of entity tags; the weak comparison applies to If-None-Match.
   size_t pos = 0;
   while ((pos = if_none_match.find('"', pos)) != std::string::npos) {
@@ -127,47 +131,17 @@ std::string HttpRequest::Header(const std::string& lower_name) const {
 
 void HttpResponse::SetHeader(const std::string& name, const std::string& value) { headers.emplace_back(name, value); }
 
-std::shared_ptr<const StoredTile> TileCache::Get(const std::string& key) {
-  std::lock_guard lock(mutex_);
-  const auto it = index_.find(key);
-  if (it == index_.end()) return nullptr;
-  order_.splice(order_.begin(), order_, it->second);
-  return it->second->second;
-}
-
-void TileCache::Put(const std::string& key, std::shared_ptr<const StoredTile> tile) {
-  std::lock_guard lock(mutex_);
-  if (index_.count(key) || tile->bytes.size() > capacity_) return;
-  size_ += tile->bytes.size();
-  order_.emplace_front(key, std::move(tile));
-  index_[key] = order_.begin();
-  while (size_ > capacity_) {
-    size_ -= order_.back().second->bytes.size();
-    index_.erase(order_.back().first);
-    order_.pop_back();
-  }
-}
-
-void TileCache::EraseDataset(const std::string& dataset_id) {
-  std::lock_guard lock(mutex_);
-  for (auto it = order_.begin(); it != order_.end();) {
-    if (it->first.rfind(dataset_id + "/", 0) == 0) {
-      size_ -= it->second->bytes.size();
-      index_.erase(it->first);
-      it = order_.erase(it);
-    } else {
-      ++it;
-    }
-  }
-}
-
 Service::Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig config)
-    : store_(store), jobs_(jobs), metrics_(metrics), config_(std::move(config)), cache_(config_.tile_cache_bytes) {}
+    : store_(store),
+      jobs_(jobs),
+      metrics_(metrics),
+      config_(std::move(config)),
+      access_(config_.token, config_.read_token, config_.require_token_for_reads),
+      cors_(config_.cors_origins),
+      cache_(config_.tile_cache_bytes) {}
 
-void Service::AddCors(HttpResponse& response) const {
-  response.SetHeader("Access-Control-Allow-Origin", config_.cors_origins.front());
-  response.SetHeader("Access-Control-Expose-Headers", "Content-Range, Content-Length, ETag, Location, Accept-Ranges");
-  if (config_.cors_origins.front() != "*") response.SetHeader("Vary", "Origin");
+void Service::AddCors(HttpResponse& response, const std::string& origin) const {
+  for (auto& [name, value] : cors_.Headers(origin)) response.SetHeader(name, value);
 }
 
 HttpResponse Service::Json(int status, const nlohmann::json& body, const std::string& route) const {
@@ -177,22 +151,44 @@ HttpResponse Service::Json(int status, const nlohmann::json& body, const std::st
   r.body = DumpJson(body, 2) + "\n";
   r.SetHeader("Content-Type", "application/json");
   r.SetHeader("Cache-Control", "no-store");
+  return r;
+}
+
+HttpResponse Service::Fail(int status, const std::string& message, const std::string& route) const {
+  return Json(status, {{"error", message}}, route);
+}
+
+HttpResponse Service::Error(int status, const std::string& message, const std::string& route) const {
+  HttpResponse r = Fail(status, message, route);
   AddCors(r);
   return r;
 }
 
-HttpResponse Service::Error(int status, const std::string& message, const std::string& route) const {
-  return Json(status, {{"error", message}}, route);
+HttpResponse Service::StoreFailure(const Status& status, const std::string& route) const {
+  if (status.code() == StatusCode::kResourceLimit) {
+    HttpResponse r = Fail(503, "the store is busy: " + status.message(), route);
+    r.SetHeader("Retry-After", "1");
+    return r;
+  }
+  return Fail(500, "the store failed: " + status.ToString(), route);
 }
 
-bool Service::Authorized(const HttpRequest& request) const {
-  if (config_.token.empty()) return true;
-  const std::string expected = "Bearer " + config_.token;
-  const std::string given = request.Header("authorization");
-  if (given.size() != expected.size()) return false;
-  unsigned char diff = 0;  // the same time whatever the first wrong byte
-  for (size_t i = 0; i < given.size(); ++i) diff |= static_cast<unsigned char>(given[i] ^ expected[i]);
-  return diff == 0;
+std::optional<HttpResponse> Service::Deny(const HttpRequest& request, Scope needed, const std::string& route) const {
+  switch (access_.Check(request.Header("authorization"), needed)) {
+    case AccessPolicy::Verdict::kAllowed:
+      return std::nullopt;
+    case AccessPolicy::Verdict::kMalformed:
+      return Fail(400, "send one Authorization header with one 'Bearer <token>'", route);
+    case AccessPolicy::Verdict::kForbidden:
+      return Fail(403, "this token may only read; writes need the write token", route);
+    case AccessPolicy::Verdict::kUnauthenticated:
+      break;
+  }
+  HttpResponse r = Fail(401, needed == Scope::kWrite ? "this daemon needs 'Authorization: Bearer <token>' for writes"
+                                                     : "this daemon needs 'Authorization: Bearer <token>' for reads",
+                        route);
+  r.SetHeader("WWW-Authenticate", "Bearer");
+  return r;
 }
 
 bool Service::IsUpload(const HttpRequest& request) const {
@@ -200,56 +196,70 @@ bool Service::IsUpload(const HttpRequest& request) const {
 }
 
 std::optional<HttpResponse> Service::AdmitUpload(const HttpRequest& request) const {
+  auto r = Admit(request);
+  if (r) AddCors(*r, request.Header("origin"));
+  return r;
+}
+
+HttpResponse Service::FinishUpload(const HttpRequest& request, const std::filesystem::path& file) {
+  HttpResponse r = Finish(request, file);
+  AddCors(r, request.Header("origin"));
+  return r;
+}
+
+HttpResponse Service::Handle(const HttpRequest& request) {
+  HttpResponse r = Route(request);
+  AddCors(r, request.Header("origin"));
+  return r;
+}
+
+std::optional<HttpResponse> Service::Admit(const HttpRequest& request) const {
   const std::string route = "/v1/datasets";
-  if (!Authorized(request)) {
-    HttpResponse r = Error(401, "this daemon needs 'Authorization: Bearer <token>' for writes", route);
-    r.SetHeader("WWW-Authenticate", "Bearer");
-    return r;
-  }
+  if (auto denied = Deny(request, Scope::kWrite, route)) return denied;
   const auto query = ParseQuery(QueryOf(request.target));
   for (const auto& [key, value] : query) {
     if (key != "name" && key != "voxel" && key != "epsg" && key != "quality") {
-      return Error(400, "unknown query parameter '" + key + "' (name, voxel, epsg, quality)", route);
+      return Fail(400, "unknown query parameter '" + key + "' (name, voxel, epsg, quality)", route);
     }
   }
   if (query.count("voxel")) {
     const auto v = ParseNumber<double>(query.at("voxel"));
-    if (!v || !std::isfinite(*v) || *v <= 0) return Error(400, "voxel must be a positive number", route);
+    if (!v || !std::isfinite(*v) || *v <= 0) return Fail(400, "voxel must be a positive number", route);
   }
   if (query.count("epsg")) {
     const auto v = ParseNumber<int>(query.at("epsg"));
-    if (!v || *v <= 0) return Error(400, "epsg must be a positive integer EPSG code", route);
+    if (!v || *v <= 0) return Fail(400, "epsg must be a positive integer EPSG code", route);
   }
   if (query.count("quality")) {
     const auto v = ParseNumber<double>(query.at("quality"));
-    if (!v || !std::isfinite(*v) || *v < 10 || *v > 80) return Error(400, "quality must be a PSNR-Y in dB between 10 and 80", route);
+    if (!v || !std::isfinite(*v) || *v < 10 || *v > 80) return Fail(400, "quality must be a PSNR-Y in dB between 10 and 80", route);
   }
   const std::string length = request.Header("content-length");
   if (!length.empty()) {
     const auto n = ParseNumber<uint64_t>(length);
-    if (!n) return Error(400, "Content-Length is not a number", route);
+    if (!n) return Fail(400, "Content-Length is not a number", route);
     if (*n > config_.max_upload_bytes) {
-      return Error(413, "the upload is " + length + " bytes; this daemon takes at most " +
-                            std::to_string(config_.max_upload_bytes), route);
+      return Fail(413, "the upload is " + length + " bytes; this daemon takes at most " +
+                           std::to_string(config_.max_upload_bytes), route);
     }
   } else if (request.Header("transfer-encoding").empty()) {
-    return Error(411, "an upload needs Content-Length or chunked transfer encoding", route);
+    return Fail(411, "an upload needs Content-Length or chunked transfer encoding", route);
   }
   if (jobs_.full()) {
-    HttpResponse r = Error(503, "the job queue is full; try again later", route);
+    HttpResponse r = Fail(503, "the job queue is full; try again later", route);
     r.SetHeader("Retry-After", "30");
     return r;
   }
   return std::nullopt;
 }
 
-HttpResponse Service::FinishUpload(const HttpRequest& request, const std::filesystem::path& file) {
+HttpResponse Service::Finish(const HttpRequest& request, const std::filesystem::path& file) {
   const std::string route = "/v1/datasets";
   std::error_code ec;
   const auto remove_upload = [&] { std::filesystem::remove(file, ec); };
   if (std::filesystem::file_size(file, ec) == 0) {
     remove_upload();
-    return Error(400, "the upload is empty: send a LAS, PLY or PCD scan as the body", route);
+    return Fail(400, "the upload is empty: send a LAS, PLY or PCD scan as the body", route);
   }
   // The reader validates every header field against the real size before a job is made.
   auto scan = OpenScan(file);
@@ -258,7 +268,7 @@ HttpResponse Service::FinishUpload(const HttpRequest& request, const std::filesy
     const int status = scan.status().code() == StatusCode::kUnsupported ? 415 : 400;
     std::string message = scan.status().ToString();  // in the upload's words, not our file's name
     for (size_t at; (at = message.find(file.string())) != std::string::npos;) message.replace(at, file.string().size(), "the upload");
-    return Error(status, message, route);
+    return Fail(status, message, route);
   }
   const auto query = ParseQuery(QueryOf(request.target));
   JobRecord job;
@@ -270,18 +280,32 @@ HttpResponse Service::FinishUpload(const HttpRequest& request, const std::filesy
   if (query.count("quality")) job.params["quality"] = *ParseNumber<double>(query.at("quality"));
   if (const Status s = store_.CreateJob(job); !s.ok()) {
     remove_upload();
-    return Error(500, s.ToString(), route);
+    return StoreFailure(s, route);
   }
   if (!jobs_.Submit(job.id)) {
     (void)store_.SetJobState(job.id, "failed", "the job queue was full");
     remove_upload();
-    HttpResponse r = Error(503, "the job queue is full; try again later", route);
+    HttpResponse r = Fail(503, "the job queue is full; try again later", route);
     r.SetHeader("Retry-After", "30");
     return r;
   }
-  HttpResponse r = Json(202, JobJson(*store_.GetJob(job.id)), route);
+  const auto stored = store_.GetJob(job.id);  // with its times; the job as sent when the read fails
+  HttpResponse r = Json(202, JobJson(stored.ok() && *stored ? **stored : job), route);
   r.SetHeader("Location", "/v1/jobs/" + job.id);
   return r;
+}
+
+HttpResponse Service::GetJob(const std::string& id) {
+  const std::string route = "/v1/jobs/{id}";
+  auto job = store_.GetJob(id);
+  if (!job.ok()) return StoreFailure(job.status(), route);
+  if (!*job) return Fail(404, "no job " + id, route);
+  // An end the store could not record yet is the truth about the job.
+  if (const auto pending = jobs_.Pending(id)) {
+    (*job)->state = pending->state;
+    (*job)->error = pending->error;
+  }
+  return Json(200, JobJson(**job), route);
 }
 
 nlohmann::json Service::JobJson(const JobRecord& job) {
@@ -299,14 +323,13 @@ nlohmann::json Service::JobJson(const JobRecord& job) {
           {"updated", job.updated}};
 }
 
-HttpResponse Service::Handle(const HttpRequest& request) {
+HttpResponse Service::Route(const HttpRequest& request) {
   const std::string path = PathOf(request.target);
   const std::vector<std::string> parts = SplitPath(path);
   if (request.method == "OPTIONS") {  // CORS preflight
     HttpResponse r;
     r.status = 204;
     r.route = "preflight";
-    AddCors(r);
     r.SetHeader("Access-Control-Allow-Methods", "GET, HEAD, POST, DELETE, OPTIONS");
     r.SetHeader("Access-Control-Allow-Headers", "Range, Authorization, If-None-Match, Content-Type");
     r.SetHeader("Access-Control-Max-Age", "86400");
@@ -314,7 +337,7 @@ HttpResponse Service::Handle(const HttpRequest& request) {
   }
   const bool get = request.method == "GET" || request.method == "HEAD";
   const auto method_not_allowed = [&](const std::string& route, const std::string& allow) {
-    HttpResponse r = Error(405, request.method + " is not allowed here (" + allow + ")", route);
+    HttpResponse r = Fail(405, request.method + " is not allowed here (" + allow + ")", route);
     r.SetHeader("Allow", allow);
     return r;
   };
@@ -325,73 +348,91 @@ HttpResponse Service::Handle(const HttpRequest& request) {
   }
   if (path == "/metrics") {
     if (!get) return method_not_allowed(path, "GET");
+    if (auto denied = Deny(request, Scope::kRead, path)) return *denied;
+    const auto jobs = store_.JobCountsByState();
+    if (!jobs.ok()) return StoreFailure(jobs.status(), path);
     HttpResponse r;
     r.route = path;
-    r.body = metrics_.Render(store_.JobCountsByState());
+    r.body = metrics_.Render(*jobs);
     r.SetHeader("Content-Type", "text/plain; version=0.0.4");
     return r;
   }
   if (parts.size() == 3 && parts[0] == "v1" && parts[1] == "jobs") {
     const std::string route = "/v1/jobs/{id}";
     if (!get) return method_not_allowed(route, "GET");
-    const auto job = store_.GetJob(parts[2]);
-    return job ? Json(200, JobJson(*job), route) : Error(404, "no job " + parts[2], route);
+    if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+    return GetJob(parts[2]);
   }
   if (parts.size() >= 2 && parts[0] == "v1" && parts[1] == "datasets") {
     if (parts.size() == 2) {
       const std::string route = "/v1/datasets";
       if (!get) return method_not_allowed(route, "GET, POST");
-      return Json(200, {{"datasets", store_.ListDatasets()}}, route);
+      if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+      const auto list = store_.ListDatasets();
+      return list.ok() ? Json(200, {{"datasets", *list}}, route) : StoreFailure(list.status(), route);
     }
     const std::string& id = parts[2];
     if (parts.size() == 3) {
       const std::string route = "/v1/datasets/{id}";
       if (request.method == "DELETE") {
-        if (!Authorized(request)) {
-          HttpResponse r = Error(401, "this daemon needs 'Authorization: Bearer <token>' for writes", route);
-          r.SetHeader("WWW-Authenticate", "Bearer");
-          return r;
-        }
-        if (!store_.DeleteDataset(id)) return Error(404, "no dataset " + id, route);
+        if (auto denied = Deny(request, Scope::kWrite, route)) return *denied;
+        const auto deleted = store_.DeleteDataset(id);
+        if (!deleted.ok()) return StoreFailure(deleted.status(), route);
+        if (!*deleted) return Fail(404, "no dataset " + id, route);
         cache_.EraseDataset(id);
         HttpResponse r;
         r.status = 204;
         r.route = route;
-        AddCors(r);
         return r;
       }
       if (!get) return method_not_allowed(route, "GET, DELETE");
+      if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
       const auto meta = store_.GetDataset(id);
-      return meta ? Json(200, *meta, route) : Error(404, "no dataset " + id, route);
+      if (!meta.ok()) return StoreFailure(meta.status(), route);
+      return *meta ? Json(200, **meta, route) : Fail(404, "no dataset " + id, route);
     }
     if (parts[3] == "tiles" || parts[3] == "hierarchy") {
       const std::string route = "/v1/datasets/{id}/" + parts[3];
       if (!get) return method_not_allowed(route, "GET");
+      if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
       const auto key = ParseTileKey(parts, 4);
-      if (!key) return Error(400, "a tile is addressed as " + parts[3] + "/{level}/{x}/{y}/{z} with level 0..21", route);
+      if (!key) return Fail(400, "a tile is addressed as " + parts[3] + "/{level}/{x}/{y}/{z} with level 0..21", route);
       return parts[3] == "tiles" ? GetTile(request, id, *key) : GetHierarchy(request, id, *key);
     }
   }
-  return Error(404, "no such resource: " + path, "other");
+  return Fail(404, "no such resource: " + path, "other");
+}
+
+HttpResponse Service::NotFound(const std::string& dataset, const std::string& what, const std::string& route) {
+  const auto meta = store_.GetDataset(dataset);
+  if (!meta.ok()) return StoreFailure(meta.status(), route);
+  return Fail(404, *meta ? what : "no dataset " + dataset, route);
 }
 
 HttpResponse Service::GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key) {
   const std::string route = "/v1/datasets/{id}/tiles";
-  const std::string cache_key = dataset + "/" + std::to_string(key.level) + "/" + std::to_string(key.x) + "/" +
-                                std::to_string(key.y) + "/" + std::to_string(key.z);
+  const std::string address = std::to_string(key.level) + "/" + std::to_string(key.x) + "/" + std::to_string(key.y) + "/" +
+                              std::to_string(key.z);
+  const std::string cache_key = dataset + "/" + address;
   std::shared_ptr<const StoredTile> tile = cache_.Get(cache_key);
   if (!tile) {
+    const uint64_t generation = cache_.generation();  // before the read: a DELETE meanwhile keeps it out of the cache
     auto stored = store_.GetTile(dataset, key);
-    if (!stored) {
-      return Error(404, store_.GetDataset(dataset) ? "no tile " + cache_key.substr(dataset.size() + 1) + " in this dataset"
-                                                   : "no dataset " + dataset, route);
+    if (!stored.ok()) return StoreFailure(stored.status(), route);
+    if (!*stored) return NotFound(dataset, "no tile " + address + " in this dataset", route);
+    // Never serve bytes that are not what was committed: the ETag is their checksum.
+    if (TileEtag((*stored)->bytes) != (*stored)->etag) {
+      metrics_.CountCorruptTile();
+      spdlog::error("tile {} of dataset {} is corrupt in the store: its bytes do not match their checksum {}", address,
+                    dataset, (*stored)->etag);
+      return Fail(500, "tile " + address + " of dataset " + dataset +
+                           " is corrupt in the store (its bytes do not match their checksum); run pointdagd --check", route);
     }
-    tile = std::make_shared<const StoredTile>(std::move(*stored));
-    cache_.Put(cache_key, tile);
+    tile = std::make_shared<const StoredTile>(std::move(**stored));
+    cache_.Put(cache_key, tile, generation);
   }
   HttpResponse r;
   r.route = route;
-  AddCors(r);
   r.SetHeader("ETag", tile->etag);
   r.SetHeader("Cache-Control", "public, max-age=31536000, immutable");
   r.SetHeader("Accept-Ranges", "bytes");
@@ -405,7 +446,7 @@ HttpResponse Service::GetTile(const HttpRequest& request, const std::string& dat
   const bool range_applies = if_range.empty() || if_range == tile->etag;
   const auto range = range_applies ? ParseRange(request.Header("range"), size) : std::nullopt;
   if (range && range->first > range->second) {
-    HttpResponse e = Error(416, "the range lies outside the tile's " + std::to_string(size) + " bytes", route);
+    HttpResponse e = Fail(416, "the range lies outside the tile's " + std::to_string(size) + " bytes", route);
     e.SetHeader("Content-Range", "bytes */" + std::to_string(size));
     return e;
   }
@@ -426,17 +467,16 @@ HttpResponse Service::GetHierarchy(const HttpRequest& request, const std::string
   int depth = 4;
   if (query.count("depth")) {
     const auto d = ParseNumber<int>(query.at("depth"));
-    if (!d || *d < 0 || *d > 8) return Error(400, "depth must be 0..8", route);
+    if (!d || *d < 0 || *d > 8) return Fail(400, "depth must be 0..8", route);
     depth = *d;
   }
   std::vector<TileKey> more;
   const auto tiles = store_.TilesBelow(dataset, key, depth, more);
-  if (tiles.empty()) {
-    return Error(404, store_.GetDataset(dataset) ? "no tile at this node" : "no dataset " + dataset, route);
-  }
+  if (!tiles.ok()) return StoreFailure(tiles.status(), route);
+  if (tiles->empty()) return NotFound(dataset, "no tile at this node", route);
   const auto key_json = [](const TileKey& k) { return nlohmann::json{{"level", k.level}, {"x", k.x}, {"y", k.y}, {"z", k.z}}; };
   nlohmann::json list = nlohmann::json::array(), pages = nlohmann::json::array();
-  for (const HierarchyEntry& e : tiles) {
+  for (const HierarchyEntry& e : *tiles) {
     nlohmann::json j = key_json(e.key);
     j["voxels"] = e.voxels;
     list.push_back(std::move(j));

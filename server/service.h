@@ -4,18 +4,18 @@
 #pragma once
 
 #include <filesystem>
-#include <list>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "access.h"
 #include "jobs.h"
 #include "metrics.h"
 #include "store.h"
+#include "tile_cache.h"
 
 namespace pointdag::server {
 
@@ -37,28 +37,12 @@ struct HttpResponse {
 
 struct ServiceConfig {
   std::string token;       // write scope (uploads, DELETE; reads too); empty: writes need no token
-  std::string read_token;  // read scope only; empty: none
-  bool require_token_for_reads = false;  // GETs of jobs, datasets, tiles need the read or write token
+  std::string read_token;  // read scope only (a write with it: 403); empty: none
+  bool require_token_for_reads = false;  // GETs of jobs, datasets, tiles, hierarchy, /metrics need the read or write token
   std::vector<std::string> cors_origins{"*"};  // "*" or exact origins echoed back when they match
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   std::filesystem::path upload_dir;
   size_t tile_cache_bytes = size_t{256} << 20;
-};
-
-// Immutable tiles recently served, least recently used dropped first.
-class TileCache {
- public:
-  explicit TileCache(size_t capacity_bytes) : capacity_(capacity_bytes) {}
-  std::shared_ptr<const StoredTile> Get(const std::string& key);
-  void Put(const std::string& key, std::shared_ptr<const StoredTile> tile);
-  void EraseDataset(const std::string& dataset_id);
-
- private:
-  using Entry = std::pair<std::string, std::shared_ptr<const StoredTile>>;
-  std::mutex mutex_;
-  size_t capacity_, size_ = 0;
-  std::list<Entry> order_;  // most recent first
-  std::unordered_map<std::string, std::list<Entry>::iterator> index_;
 };
 
 class Service {
@@ -66,22 +50,33 @@ class Service {
   Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig config);
 
   bool IsUpload(const HttpRequest& request) const;
-  // Uploads, first from the header alone: an answer (401, 400, 413, 503) or nullopt to read the body.
+  // Uploads, first from the header alone: an answer (400, 401, 403, 411, 413, 503) or nullopt to read the body.
   std::optional<HttpResponse> AdmitUpload(const HttpRequest& request) const;
   // Then with the body on disk at `file` (removed unless a job takes it).
   HttpResponse FinishUpload(const HttpRequest& request, const std::filesystem::path& file);
   // Every other request.
   HttpResponse Handle(const HttpRequest& request);
-  // An error answer in the API's JSON form, with CORS.
+  // An error answer in the API's JSON form, with CORS (as for a request without Origin).
   HttpResponse Error(int status, const std::string& message, const std::string& route) const;
-  // CORS headers for every answer.
-  void AddCors(HttpResponse& response) const;
+  // CORS headers for every answer, for a request from `origin` (empty: none given).
+  void AddCors(HttpResponse& response, const std::string& origin = "") const;
   const ServiceConfig& config() const { return config_; }
   void set_ready(bool ready) { ready_ = ready; }
 
  private:
+  // Answers without CORS; the public entry points add it for the request's Origin.
   HttpResponse Json(int status, const nlohmann::json& body, const std::string& route) const;
-  bool Authorized(const HttpRequest& request) const;
+  HttpResponse Fail(int status, const std::string& message, const std::string& route) const;
+  // 503 with Retry-After when another process holds the store's lock, else 500.
+  HttpResponse StoreFailure(const Status& status, const std::string& route) const;
+  // An answer refusing the request (400, 401, 403), or nullopt when it may go on.
+  std::optional<HttpResponse> Deny(const HttpRequest& request, Scope needed, const std::string& route) const;
+  HttpResponse Route(const HttpRequest& request);
+  std::optional<HttpResponse> Admit(const HttpRequest& request) const;
+  HttpResponse Finish(const HttpRequest& request, const std::filesystem::path& file);
+  HttpResponse GetJob(const std::string& id);
+  // 404 naming what is missing: the dataset, or `what` within it.
+  HttpResponse NotFound(const std::string& dataset, const std::string& what, const std::string& route);
   HttpResponse GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key);
   HttpResponse GetHierarchy(const HttpRequest& request, const std::string& dataset, const TileKey& key);
   static nlohmann::json JobJson(const JobRecord& job);
@@ -90,6 +85,8 @@ class Service {
   JobQueue& jobs_;
   Metrics& metrics_;
   ServiceConfig config_;
+  AccessPolicy access_;
+  CorsPolicy cors_;
   TileCache cache_;
   bool ready_ = false;
 };

@@ -1,81 +1,25 @@
 #include "store.h"
 
-#include "pointdag/json_text.h"
-
 #include <xxhash.h>
 
 #include <chrono>
 #include <cstdio>
 #include <random>
 
+#include "pointdag/json_text.h"
+#include "sqlite_util.h"
+
 namespace pointdag::server {
 namespace {
 
 double Now() { return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(); }
 
-// A prepared statement, finalized at scope end; Bind() takes values in placeholder order.
-class Statement {
- public:
-  Statement(sqlite3* db, const char* sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) stmt_ = nullptr;
-  }
-  ~Statement() { sqlite3_finalize(stmt_); }
-  bool ok() const { return stmt_ != nullptr; }
-
-  template <typename... Args>
-  Statement& Bind(const Args&... args) {
-    int index = 0;
-    (BindOne(++index, args), ...);
-    return *this;
-  }
-  void Reset() {
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-  }
-  // SQLITE_ROW, SQLITE_DONE or an error code.
-  int Step() { return stmt_ ? sqlite3_step(stmt_) : SQLITE_MISUSE; }
-  Status Run() {
-    const int rc = Step();
-    return rc == SQLITE_DONE || rc == SQLITE_ROW ? Status::Ok() : IoError(std::string("sqlite: ") + sqlite3_errmsg(db_));
-  }
-  std::string Text(int col) const {
-    const auto* p = sqlite3_column_text(stmt_, col);
-    return p ? reinterpret_cast<const char*>(p) : "";
-  }
-  int64_t Int(int col) const { return sqlite3_column_int64(stmt_, col); }
-  double Real(int col) const { return sqlite3_column_double(stmt_, col); }
-  std::vector<uint8_t> Blob(int col) const {
-    const auto* p = static_cast<const uint8_t*>(sqlite3_column_blob(stmt_, col));
-    return p ? std::vector<uint8_t>(p, p + sqlite3_column_bytes(stmt_, col)) : std::vector<uint8_t>{};
-  }
-
- private:
-  void BindOne(int i, const std::string& v) { sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT); }
-  void BindOne(int i, const char* v) { sqlite3_bind_text(stmt_, i, v, -1, SQLITE_TRANSIENT); }
-  void BindOne(int i, double v) { sqlite3_bind_double(stmt_, i, v); }
-  void BindOne(int i, int v) { sqlite3_bind_int64(stmt_, i, v); }
-  void BindOne(int i, uint32_t v) { sqlite3_bind_int64(stmt_, i, v); }
-  void BindOne(int i, uint64_t v) { sqlite3_bind_int64(stmt_, i, static_cast<int64_t>(v)); }
-  void BindOne(int i, const std::vector<uint8_t>& v) { sqlite3_bind_blob(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_STATIC); }
-  sqlite3* db_;
-  sqlite3_stmt* stmt_ = nullptr;
-};
-
-Status Exec(sqlite3* db, const char* sql) {
-  char* error = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-    std::string message = error ? error : "unknown";
-    sqlite3_free(error);
-    return IoError("sqlite: " + message);
-  }
-  return Status::Ok();
-}
-
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS jobs (
   id TEXT PRIMARY KEY, state TEXT NOT NULL, stage TEXT NOT NULL, percent REAL NOT NULL,
   points_in INTEGER NOT NULL, voxels_out INTEGER NOT NULL, dataset_id TEXT NOT NULL, error TEXT NOT NULL,
-  upload_path TEXT NOT NULL, params TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL);
+  upload_path TEXT NOT NULL, params TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL,
+  attempts INTEGER NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS datasets (
   id TEXT PRIMARY KEY, name TEXT NOT NULL, created REAL NOT NULL, meta TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -85,14 +29,22 @@ CREATE TABLE IF NOT EXISTS tiles (
   PRIMARY KEY (dataset_id, level, x, y, z));
 )sql";
 
-StatusOr<sqlite3*> OpenConnection(const std::filesystem::path& file) {
+// Stores written before jobs.attempts existed get the column (their jobs count as never started).
+Status Migrate(sqlite3* db) {
+  Statement columns(db, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'attempts'");
+  ASSIGN_OR_RETURN(const bool has_attempts, columns.Next());
+  if (has_attempts) return Status::Ok();
+  return Exec(db, "ALTER TABLE jobs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0");
+}
+
+StatusOr<sqlite3*> OpenConnection(const std::filesystem::path& file, int busy_timeout_ms) {
   sqlite3* db = nullptr;
   if (sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
     std::string message = db ? sqlite3_errmsg(db) : "out of memory";
     sqlite3_close(db);
     return IoError("cannot open the store " + file.string() + ": " + message);
   }
-  sqlite3_busy_timeout(db, 10000);
+  sqlite3_busy_timeout(db, busy_timeout_ms);
   return db;
 }
 
@@ -107,19 +59,23 @@ JobRecord ReadJob(const Statement& s) {
   j.dataset_id = s.Text(6);
   j.error = s.Text(7);
   j.upload_path = s.Text(8);
-  j.params = nlohmann::json::parse(s.Text(9), nullptr, false);
+  auto params = ParseJson(s.Text(9));
+  j.params = params.ok() ? std::move(*params) : nlohmann::json();  // the job reports what it cannot use
   j.created = s.Real(10);
   j.updated = s.Real(11);
+  j.attempts = static_cast<int>(s.Int(12));
   return j;
 }
 
 constexpr const char* kJobColumns =
-    "SELECT id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, params, created, updated FROM jobs";
+    "SELECT id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, params, created, updated, "
+    "attempts FROM jobs";
 
-std::string TileEtag(const std::vector<uint8_t>& bytes) {
-  char hex[40];
-  std::snprintf(hex, sizeof(hex), "\"%016llx\"", static_cast<unsigned long long>(XXH3_64bits(bytes.data(), bytes.size())));
-  return hex;
+// Dataset metadata as stored; a row that is not JSON is reported, not thrown.
+StatusOr<nlohmann::json> ParseMeta(const std::string& text) {
+  auto meta = ParseJson(text);
+  if (!meta.ok()) return Corrupt("a dataset's stored metadata is not JSON: " + meta.status().message());
+  return meta;
 }
 
 }  // namespace
@@ -131,12 +87,20 @@ std::string NewId() {
   return hex;
 }
 
-StatusOr<std::unique_ptr<Store>> Store::Open(const std::filesystem::path& file) {
+std::string TileEtag(std::span<const uint8_t> bytes) {
+  char hex[40];
+  std::snprintf(hex, sizeof(hex), "\"%016llx\"", static_cast<unsigned long long>(XXH3_64bits(bytes.data(), bytes.size())));
+  return hex;
+}
+
+StatusOr<std::unique_ptr<Store>> Store::Open(const std::filesystem::path& file, int busy_timeout_ms) {
   std::unique_ptr<Store> store(new Store());
-  ASSIGN_OR_RETURN(store->writer_, OpenConnection(file));
+  store->busy_timeout_ms_ = busy_timeout_ms;
+  ASSIGN_OR_RETURN(store->writer_, OpenConnection(file, busy_timeout_ms));
   RETURN_IF_ERROR(Exec(store->writer_, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;"));
   RETURN_IF_ERROR(Exec(store->writer_, kSchema));
-  ASSIGN_OR_RETURN(store->reader_, OpenConnection(file));
+  RETURN_IF_ERROR(Migrate(store->writer_));
+  ASSIGN_OR_RETURN(store->reader_, OpenConnection(file, busy_timeout_ms));
   return store;
 }
 
@@ -147,18 +111,30 @@ Store::~Store() {
 
 Status Store::CreateJob(const JobRecord& job) {
   std::lock_guard lock(write_mutex_);
-  Statement s(writer_, "INSERT INTO jobs VALUES (?,?,?,?,?,?,?,?,?,?,?,?)");
+  Statement s(writer_,
+              "INSERT INTO jobs (id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, params, "
+              "created, updated, attempts) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const double now = Now();
   return s.Bind(job.id, job.state, job.stage, job.percent, job.points_in, job.voxels_out, job.dataset_id, job.error,
-                job.upload_path, DumpJson(job.params), now, now)
+                job.upload_path, DumpJson(job.params), now, now, job.attempts)
       .Run();
+}
+
+Status Store::StartAttempt(const std::string& id) {
+  std::lock_guard lock(write_mutex_);
+  Statement s(writer_, "UPDATE jobs SET state='running', stage='survey', percent=0, attempts=attempts+1, updated=? WHERE id=?");
+  return s.Bind(Now(), id).Run();
 }
 
 Status Store::UpdateJobProgress(const std::string& id, const std::string& stage, double percent, uint64_t points_in,
                                 uint64_t voxels_out) {
   std::lock_guard lock(write_mutex_);
+  // Progress is best effort: it never waits for another process's lock, so it cannot slow the job.
+  sqlite3_busy_timeout(writer_, 0);
   Statement s(writer_, "UPDATE jobs SET state='running', stage=?, percent=?, points_in=?, voxels_out=?, updated=? WHERE id=?");
-  return s.Bind(stage, percent, points_in, voxels_out, Now(), id).Run();
+  const Status status = s.Bind(stage, percent, points_in, voxels_out, Now(), id).Run();
+  sqlite3_busy_timeout(writer_, busy_timeout_ms_);
+  return status;
 }
 
 Status Store::SetJobState(const std::string& id, const std::string& state, const std::string& error) {
@@ -167,30 +143,38 @@ Status Store::SetJobState(const std::string& id, const std::string& state, const
   return s.Bind(state, error, Now(), id).Run();
 }
 
-std::optional<JobRecord> Store::GetJob(const std::string& id) {
+StatusOr<std::optional<JobRecord>> Store::GetJob(const std::string& id) {
   std::lock_guard lock(read_mutex_);
   Statement s(reader_, (std::string(kJobColumns) + " WHERE id=?").c_str());
   s.Bind(id);
-  if (s.Step() != SQLITE_ROW) return std::nullopt;
-  return ReadJob(s);
+  ASSIGN_OR_RETURN(const bool found, s.Next());
+  return found ? std::optional<JobRecord>(ReadJob(s)) : std::optional<JobRecord>();
 }
 
-std::vector<JobRecord> Store::JobsInStates(const std::vector<std::string>& states) {
+StatusOr<std::vector<JobRecord>> Store::JobsInStates(const std::vector<std::string>& states) {
   std::lock_guard lock(read_mutex_);
   std::vector<JobRecord> out;
   for (const std::string& state : states) {
     Statement s(reader_, (std::string(kJobColumns) + " WHERE state=? ORDER BY created").c_str());
     s.Bind(state);
-    while (s.Step() == SQLITE_ROW) out.push_back(ReadJob(s));
+    for (;;) {
+      ASSIGN_OR_RETURN(const bool row, s.Next());
+      if (!row) break;
+      out.push_back(ReadJob(s));
+    }
   }
   return out;
 }
 
-std::map<std::string, uint64_t> Store::JobCountsByState() {
+StatusOr<std::map<std::string, uint64_t>> Store::JobCountsByState() {
   std::lock_guard lock(read_mutex_);
   std::map<std::string, uint64_t> out{{"queued", 0}, {"running", 0}, {"done", 0}, {"failed", 0}};
   Statement s(reader_, "SELECT state, COUNT(*) FROM jobs GROUP BY state");
-  while (s.Step() == SQLITE_ROW) out[s.Text(0)] = static_cast<uint64_t>(s.Int(1));
+  for (;;) {
+    ASSIGN_OR_RETURN(const bool row, s.Next());
+    if (!row) break;
+    out[s.Text(0)] = static_cast<uint64_t>(s.Int(1));
+  }
   return out;
 }
 
@@ -206,50 +190,68 @@ Status Store::CommitDataset(const std::string& job_id, const std::string& datase
       insert.Reset();
       RETURN_IF_ERROR(insert.Bind(dataset_id, t.key.level, t.key.x, t.key.y, t.key.z, t.voxels, TileEtag(t.bytes), t.bytes).Run());
     }
-    return Statement(writer_, "UPDATE jobs SET state='done', stage='done', percent=100, dataset_id=?, updated=? WHERE id=?")
-        .Bind(dataset_id, now, job_id)
-        .Run();
+    RETURN_IF_ERROR(Statement(writer_, "UPDATE jobs SET state='done', stage='done', percent=100, dataset_id=?, updated=? WHERE id=?")
+                        .Bind(dataset_id, now, job_id)
+                        .Run());
+    return Exec(writer_, "COMMIT");
   };
   const Status status = body();
-  if (!status.ok()) {
-    (void)Exec(writer_, "ROLLBACK");
-    return status;
-  }
-  return Exec(writer_, "COMMIT");
+  if (!status.ok() && !sqlite3_get_autocommit(writer_)) (void)Exec(writer_, "ROLLBACK");
+  return status;
 }
 
-std::optional<nlohmann::json> Store::GetDataset(const std::string& id) {
+StatusOr<std::optional<nlohmann::json>> Store::GetDataset(const std::string& id) {
   std::lock_guard lock(read_mutex_);
   Statement s(reader_, "SELECT meta FROM datasets WHERE id=?");
   s.Bind(id);
-  if (s.Step() != SQLITE_ROW) return std::nullopt;
-  return nlohmann::json::parse(s.Text(0));
+  ASSIGN_OR_RETURN(const bool found, s.Next());
+  if (!found) return std::optional<nlohmann::json>();
+  ASSIGN_OR_RETURN(nlohmann::json meta, ParseMeta(s.Text(0)));
+  return std::optional<nlohmann::json>(std::move(meta));
 }
 
-std::vector<nlohmann::json> Store::ListDatasets() {
+StatusOr<std::vector<nlohmann::json>> Store::ListDatasets() {
   std::lock_guard lock(read_mutex_);
   std::vector<nlohmann::json> out;
   Statement s(reader_, "SELECT meta FROM datasets ORDER BY created");
-  while (s.Step() == SQLITE_ROW) out.push_back(nlohmann::json::parse(s.Text(0)));
+  for (;;) {
+    ASSIGN_OR_RETURN(const bool row, s.Next());
+    if (!row) break;
+    ASSIGN_OR_RETURN(nlohmann::json meta, ParseMeta(s.Text(0)));
+    out.push_back(std::move(meta));
+  }
   return out;
 }
 
-bool Store::DeleteDataset(const std::string& id) {
+StatusOr<bool> Store::DeleteDataset(const std::string& id) {
   std::lock_guard lock(write_mutex_);
-  if (!Statement(writer_, "DELETE FROM datasets WHERE id=?").Bind(id).Run().ok()) return false;
-  return sqlite3_changes(writer_) > 0;
+  RETURN_IF_ERROR(Exec(writer_, "BEGIN IMMEDIATE"));
+  bool deleted = false;
+  const auto body = [&]() -> Status {
+    RETURN_IF_ERROR(Statement(writer_, "DELETE FROM datasets WHERE id=?").Bind(id).Run());
+    deleted = sqlite3_changes(writer_) > 0;
+    // The job keeps its dataset's id as history; its stage says the dataset is gone on purpose.
+    RETURN_IF_ERROR(Statement(writer_, "UPDATE jobs SET stage='deleted', updated=? WHERE dataset_id=?").Bind(Now(), id).Run());
+    return Exec(writer_, "COMMIT");
+  };
+  const Status status = body();
+  if (!status.ok()) {
+    if (!sqlite3_get_autocommit(writer_)) (void)Exec(writer_, "ROLLBACK");
+    return status;
+  }
+  return deleted;
 }
 
-std::optional<StoredTile> Store::GetTile(const std::string& dataset_id, const TileKey& key) {
+StatusOr<std::optional<StoredTile>> Store::GetTile(const std::string& dataset_id, const TileKey& key) {
   std::lock_guard lock(read_mutex_);
   Statement s(reader_, "SELECT etag, bytes FROM tiles WHERE dataset_id=? AND level=? AND x=? AND y=? AND z=?");
   s.Bind(dataset_id, key.level, key.x, key.y, key.z);
-  if (s.Step() != SQLITE_ROW) return std::nullopt;
-  return StoredTile{s.Text(0), s.Blob(1)};
+  ASSIGN_OR_RETURN(const bool found, s.Next());
+  return found ? std::optional<StoredTile>(StoredTile{s.Text(0), s.Blob(1)}) : std::optional<StoredTile>();
 }
 
-std::vector<HierarchyEntry> Store::TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
-                                              std::vector<TileKey>& more_below) {
+StatusOr<std::vector<HierarchyEntry>> Store::TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
+                                                        std::vector<TileKey>& more_below) {
   std::lock_guard lock(read_mutex_);
   std::vector<HierarchyEntry> out;
   more_below.clear();
@@ -260,7 +262,9 @@ std::vector<HierarchyEntry> Store::TilesBelow(const std::string& dataset_id, con
               "FROM tiles t WHERE dataset_id=? AND level BETWEEN ? AND ? AND (x >> (level - ?)) = ? AND "
               "(y >> (level - ?)) = ? AND (z >> (level - ?)) = ? ORDER BY level, x, y, z");
   s.Bind(dataset_id, key.level, key.level + depth, key.level, key.x, key.level, key.y, key.level, key.z);
-  while (s.Step() == SQLITE_ROW) {
+  for (;;) {
+    ASSIGN_OR_RETURN(const bool row, s.Next());
+    if (!row) break;
     const TileKey k{static_cast<int>(s.Int(0)), static_cast<uint32_t>(s.Int(1)), static_cast<uint32_t>(s.Int(2)),
                     static_cast<uint32_t>(s.Int(3))};
     out.push_back({k, static_cast<uint64_t>(s.Int(4))});

@@ -5,6 +5,10 @@
 // either nothing or everything. Tiles are immutable; their strong ETag (XXH3 of the bytes) is
 // computed once at commit. Safe to call from any thread (one connection for writes, one for reads,
 // each behind its own mutex; WAL lets them proceed together).
+//
+// Errors: kResourceLimit when another process holds the store's lock longer than the busy timeout
+// (temporary: the service answers 503 with Retry-After), kIoError for the rest (disk full, I/O). A
+// read that fails is an error, never "not found".
 #pragma once
 
 #include <sqlite3.h>
@@ -14,6 +18,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -33,6 +38,7 @@ struct JobRecord {
   std::string dataset_id;
   std::string error;
   std::string upload_path;
+  int attempts = 0;  // runs started, counted before each starts: a run that crashed the process counts
   nlohmann::json params = nlohmann::json::object();  // name, voxel, epsg, quality
   double created = 0, updated = 0;                    // Unix seconds
 };
@@ -49,38 +55,51 @@ struct HierarchyEntry {
 
 class Store {
  public:
-  static StatusOr<std::unique_ptr<Store>> Open(const std::filesystem::path& file);
+  // How long a statement waits for another process's lock before kResourceLimit: short, so an
+  // HTTP request answers 503 instead of hanging.
+  static constexpr int kBusyTimeoutMs = 2000;
+  // Creates the file and schema, or migrates an older store (adds jobs.attempts).
+  static StatusOr<std::unique_ptr<Store>> Open(const std::filesystem::path& file, int busy_timeout_ms = kBusyTimeoutMs);
   ~Store();
 
   Status CreateJob(const JobRecord& job);
+  // The job is running from now: state running, stage survey, attempts + 1 — before any work, so a
+  // run that takes the process down is counted.
+  Status StartAttempt(const std::string& id);
+  // Best effort: fails at once when another process holds the lock.
   Status UpdateJobProgress(const std::string& id, const std::string& stage, double percent, uint64_t points_in,
                            uint64_t voxels_out);
   Status SetJobState(const std::string& id, const std::string& state, const std::string& error = "");
-  std::optional<JobRecord> GetJob(const std::string& id);
-  std::vector<JobRecord> JobsInStates(const std::vector<std::string>& states);
-  std::map<std::string, uint64_t> JobCountsByState();
+  StatusOr<std::optional<JobRecord>> GetJob(const std::string& id);
+  StatusOr<std::vector<JobRecord>> JobsInStates(const std::vector<std::string>& states);
+  StatusOr<std::map<std::string, uint64_t>> JobCountsByState();
 
   // One transaction: the dataset row, every tile, and the job marked done with the dataset's id.
   Status CommitDataset(const std::string& job_id, const std::string& dataset_id, const std::string& name,
                        const nlohmann::json& meta, const TileSet& tiles);
-  std::optional<nlohmann::json> GetDataset(const std::string& id);
-  std::vector<nlohmann::json> ListDatasets();
-  bool DeleteDataset(const std::string& id);
+  StatusOr<std::optional<nlohmann::json>> GetDataset(const std::string& id);
+  StatusOr<std::vector<nlohmann::json>> ListDatasets();
+  // One transaction: the dataset and its tiles go, its job's stage becomes "deleted". False: no such dataset.
+  StatusOr<bool> DeleteDataset(const std::string& id);
 
-  std::optional<StoredTile> GetTile(const std::string& dataset_id, const TileKey& key);
+  StatusOr<std::optional<StoredTile>> GetTile(const std::string& dataset_id, const TileKey& key);
   // Tiles at `key` and up to `depth` levels below it; `more_below` are those of the deepest
   // level returned that have children of their own (the next pages to ask for).
-  std::vector<HierarchyEntry> TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
-                                         std::vector<TileKey>& more_below);
+  StatusOr<std::vector<HierarchyEntry>> TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
+                                                   std::vector<TileKey>& more_below);
 
  private:
   Store() = default;
   sqlite3* writer_ = nullptr;
   sqlite3* reader_ = nullptr;
+  int busy_timeout_ms_ = kBusyTimeoutMs;
   std::mutex write_mutex_, read_mutex_;
 };
 
 // A fresh random identifier: 16 lowercase hex digits.
 std::string NewId();
+
+// A tile's strong ETag: XXH3-64 of its bytes as 16 hex digits, quoted. Also its stored checksum.
+std::string TileEtag(std::span<const uint8_t> bytes);
 
 }  // namespace pointdag::server

@@ -10,8 +10,10 @@
 #include <thread>
 
 #include "client.h"
+#include "daemon_util.h"
 #include "pointdag/color/color_metrics.h"
 #include "pointdag/pipeline.h"
+#include "store_util.h"
 #include "test_util.h"
 
 namespace pointdag {
@@ -19,74 +21,6 @@ namespace {
 
 using client::Connection;
 using client::Response;
-constexpr const char* kToken = "s3cret";
-
-// One daemon process: started with a fresh or kept data folder, stopped by a signal of our choice.
-class Daemon {
- public:
-  explicit Daemon(std::filesystem::path data_dir, std::vector<std::string> extra = {})
-      : data_dir_(std::move(data_dir)), extra_(std::move(extra)) {}
-  ~Daemon() { Stop(SIGKILL); }
-
-  void Start() {
-    const auto port_file = data_dir_ / "port";
-    std::filesystem::create_directories(data_dir_);
-    std::filesystem::remove(port_file);
-    pid_ = fork();
-    if (pid_ == 0) {
-      std::vector<std::string> args = {POINTDAGD, "--listen", "127.0.0.1:0", "--data-dir", (data_dir_ / "var").string(),
-                                       "--port-file", port_file.string(), "--token", kToken};
-      args.insert(args.end(), extra_.begin(), extra_.end());
-      std::vector<char*> argv;
-      for (auto& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      const int log = ::open((data_dir_ / "daemon.log").c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(log, 1);
-      dup2(log, 2);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    for (int i = 0; i < 200 && !std::filesystem::exists(port_file); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    ASSERT_TRUE(std::filesystem::exists(port_file)) << "pointdagd did not start; see " << data_dir_ / "daemon.log";
-    const auto bytes = testing::ReadBytes(port_file);
-    port_ = static_cast<uint16_t>(std::stoi(std::string(bytes.begin(), bytes.end())));
-  }
-  void Stop(int signal) {
-    if (pid_ <= 0) return;
-    kill(pid_, signal);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-  }
-  std::unique_ptr<Connection> Connect() const {
-    auto c = Connection::Open("127.0.0.1", port_);
-    EXPECT_TRUE(c.ok()) << c.status().ToString();
-    return c.ok() ? std::move(*c) : nullptr;
-  }
-  uint16_t port() const { return port_; }
-  std::filesystem::path store() const { return data_dir_ / "var" / "store.sqlite"; }
-
- private:
-  std::filesystem::path data_dir_;
-  std::vector<std::string> extra_;
-  pid_t pid_ = -1;
-  uint16_t port_ = 0;
-};
-
-nlohmann::json Json(const Response& r) { return nlohmann::json::parse(r.body, nullptr, false); }
-
-const std::map<std::string, std::string> kAuth = {{"Authorization", std::string("Bearer ") + kToken}};
-
-// Polls a job until it ends; returns its last state.
-nlohmann::json WaitForJob(Connection& c, const std::string& location) {
-  nlohmann::json job;
-  for (int i = 0; i < 1200; ++i) {
-    job = Json(*c.Request("GET", location));
-    if (job["status"] == "done" || job["status"] == "failed") break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return job;
-}
 
 class ServerTest : public ::testing::Test {
  protected:
@@ -359,6 +293,123 @@ TEST(Daemon, RefusesToStartOnAnUnknownDevice) {
   EXPECT_NE(std::string(log.begin(), log.end()).find("POINTDAG_DEVICE must be auto, vulkan or cpu, not 'gpu'"), std::string::npos);
   std::filesystem::remove_all(dir);
   std::filesystem::remove(dir.string() + ".log");
+}
+
+using testing::ExecSql;
+
+// Waits until the daemon's store says the job is running (its attempt is counted then).
+void WaitUntilRunning(Connection& c, const std::string& location) {
+  for (int i = 0; i < 1000; ++i) {
+    if (Json(*c.Request("GET", location))["status"] == "running") return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  FAIL() << location << " never ran";
+}
+
+// A job whose run throws (here: parameters of the wrong type in its stored row, as a damaged or
+// foreign store holds them) ends failed with the exception's text; the daemon keeps serving.
+TEST(ServerJobs, AJobThatThrowsEndsFailedAndTheDaemonLives) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  daemon.Stop(SIGTERM);
+  const auto upload = scratch.path() / "var" / "uploads" / "thrower.upload";
+  std::filesystem::copy_file(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", upload);
+  ASSERT_TRUE(ExecSql(daemon.store(),
+                      "INSERT INTO jobs (id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, "
+                      "params, created, updated) VALUES ('00000000000000aa', 'queued', 'queued', 0, 0, 0, '', '', '" +
+                          upload.string() + "', '{\"name\": \"x\", \"voxel\": \"ten\"}', 0, 0)"));
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  const nlohmann::json job = WaitForJob(*c, "/v1/jobs/00000000000000aa");
+  EXPECT_EQ(job["status"], "failed") << job.dump();
+  EXPECT_NE(job.value("error", "").find("Internal: the job threw an exception: [json.exception.type_error.302]"), std::string::npos)
+      << job.dump();
+  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+  EXPECT_FALSE(std::filesystem::exists(upload));
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs WHERE id = '00000000000000aa'"), 1);
+}
+
+// A job that takes the process down (here: kill -9 while it runs) is run again once, then failed:
+// the daemon no longer dies after every restart.
+TEST(ServerJobs, AJobInterruptedTwiceIsNotResumedAThirdTime) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const std::string location = r->Header("location");
+  for (int crash = 1; crash <= 2; ++crash) {
+    WaitUntilRunning(*c, location);
+    daemon.Stop(SIGKILL);
+    EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs"), crash);
+    ASSERT_NO_FATAL_FAILURE(daemon.Start());
+    c = daemon.Connect();
+    ASSERT_NE(c, nullptr);
+  }
+  const nlohmann::json job = WaitForJob(*c, location);
+  EXPECT_EQ(job["status"], "failed") << job.dump();
+  EXPECT_EQ(job["error"], "interrupted 2 times (the daemon stopped or crashed while running it); not retried");
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs"), 2);
+  EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 0);
+  EXPECT_TRUE(std::filesystem::is_empty(scratch.path() / "var" / "uploads"));
+  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+}
+
+// A store written before jobs.attempts existed opens, keeps its jobs and gains the column.
+TEST(ServerJobs, AStoreWithoutTheAttemptsColumnIsMigrated) {
+  testing::ScratchDir scratch;
+  std::filesystem::create_directories(scratch.path() / "var");
+  const auto store = scratch.path() / "var" / "store.sqlite";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(store.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "CREATE TABLE jobs (id TEXT PRIMARY KEY, state TEXT NOT NULL, stage TEXT NOT NULL, percent REAL NOT "
+                         "NULL, points_in INTEGER NOT NULL, voxels_out INTEGER NOT NULL, dataset_id TEXT NOT NULL, error TEXT "
+                         "NOT NULL, upload_path TEXT NOT NULL, params TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL);"
+                         "INSERT INTO jobs VALUES ('00000000000000bb', 'failed', 'survey', 5, 0, 0, '', 'old reason', '', '{}', 1, 2);",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Daemon daemon(scratch.path());
+  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  auto c = daemon.Connect();
+  ASSERT_NE(c, nullptr);
+  const nlohmann::json job = Json(*c->Request("GET", "/v1/jobs/00000000000000bb"));
+  EXPECT_EQ(job["status"], "failed");
+  EXPECT_EQ(job["error"], "old reason");
+  EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs WHERE id = '00000000000000bb'"), 0);
+}
+
+// Invalid UTF-8 in the name: a valid JSON answer (U+FFFD in place of the byte), and a dataset.
+TEST_F(ServerTest, InvalidUtf8InTheNameGivesValidJson) {
+  SKIP_WITHOUT_DATA();
+  auto c = daemon_->Connect();
+  auto r = c->Upload("/v1/datasets?name=a%FFb&voxel=10", testing::DataDir() / "tiny_1.2-with-color_1065pts.las", kAuth);
+  ASSERT_EQ(r->status, 202);
+  const nlohmann::json accepted = Json(*r);
+  ASSERT_FALSE(accepted.is_discarded()) << r->body;
+  EXPECT_EQ(accepted["params"]["name"], "a\xEF\xBF\xBD" "b");
+  const nlohmann::json job = WaitForJob(*c, r->Header("location"));
+  ASSERT_EQ(job["status"], "done") << job.dump();
+  EXPECT_EQ(Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()))["name"], "a\xEF\xBF\xBD" "b");
+}
+
+// If-None-Match: a `*` inside a tag is not the wildcard; `Bearer` in any case is the scheme.
+TEST_F(ServerTest, StarInsideATagIsNoWildcardAndBearerIsCaseInsensitive) {
+  SKIP_WITHOUT_DATA();
+  const nlohmann::json meta = Ingest(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", "name=star&voxel=10");
+  ASSERT_FALSE(meta.is_null());
+  auto c = daemon_->Connect();
+  const std::string dataset = "/v1/datasets/" + meta["id"].get<std::string>();
+  EXPECT_EQ(c->Request("GET", dataset + "/tiles/0/0/0/0", {{"If-None-Match", "\"a*b\""}})->status, 200);
+  EXPECT_EQ(c->Request("GET", dataset + "/tiles/0/0/0/0", {{"If-None-Match", "*"}})->status, 304);
+  EXPECT_EQ(c->Request("DELETE", dataset, {{"Authorization", std::string("bearer ") + kToken}})->status, 204);
 }
 
 }  // namespace

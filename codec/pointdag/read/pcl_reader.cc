@@ -9,6 +9,8 @@
 #include <cstring>
 #include <optional>
 
+#include "pointdag/read/ply_pcd_header.h"
+
 namespace pointdag {
 namespace {
 
@@ -22,6 +24,8 @@ double LoadField(const unsigned char* p, uint8_t datatype) {
     case pcl::PCLPointField::INT32: { int32_t v; std::memcpy(&v, p, 4); return v; }
     case pcl::PCLPointField::UINT32: { uint32_t v; std::memcpy(&v, p, 4); return v; }
     case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::INT64: { int64_t v; std::memcpy(&v, p, 8); return static_cast<double>(v); }
+    case pcl::PCLPointField::UINT64: { uint64_t v; std::memcpy(&v, p, 8); return static_cast<double>(v); }
     case pcl::PCLPointField::FLOAT64: { double v; std::memcpy(&v, p, 8); return v; }
     default: return std::nan("");
   }
@@ -34,8 +38,12 @@ bool IsFloatType(uint8_t datatype) {
 class PclScanReader final : public ScanReader {
  public:
   Status Load(const std::filesystem::path& path, ScanFormat format) {
+    // PCL sees no file our own header check has not accepted (ply_pcd_header.h).
+    ASSIGN_OR_RETURN(const CheckedHeader header,
+                     format == ScanFormat::kPly ? CheckPlyHeader(path) : CheckPcdHeader(path));
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors come back as Status, not stderr noise
     info_.format = format;
+    info_.format_version = header.encoding;
     int version = 0;
     int result = -1;
     // PCL throws on some malformed headers; keep exceptions inside this module.
@@ -45,13 +53,11 @@ class PclScanReader final : public ScanReader {
         Eigen::Vector4f origin;
         Eigen::Quaternionf orientation;
         result = reader.read(path.string(), cloud_, origin, orientation, version);
-        info_.format_version = "ply";
       } else {
         pcl::PCDReader reader;
         Eigen::Vector4f origin;
         Eigen::Quaternionf orientation;
         result = reader.read(path.string(), cloud_, origin, orientation, version);
-        info_.format_version = "pcd";
       }
     } catch (const std::exception& e) {
       return Malformed(std::string(ScanFormatName(format)) + " file could not be parsed: " + e.what());
@@ -60,12 +66,12 @@ class PclScanReader final : public ScanReader {
       return Malformed(std::string(ScanFormatName(format)) +
                        " file could not be parsed (truncated, or its header does not match its data)");
     }
-    const uint64_t count = uint64_t{cloud_.width} * cloud_.height;
-    if (cloud_.data.size() < count * cloud_.point_step) {
+    // Our count, not PCL's width × height: a PLY camera element can change those while PCL reads.
+    const uint64_t count = header.points;
+    if (cloud_.point_step == 0 || cloud_.data.size() / cloud_.point_step < count) {
       return Truncated(std::string(ScanFormatName(format)) + " header declares " + std::to_string(count) +
                        " points but the data holds fewer");
     }
-    if (count == 0) return Malformed(std::string(ScanFormatName(format)) + " file holds zero points");
     info_.point_count = count;
     for (int axis = 0; axis < 3; ++axis) {
       const char* name = axis == 0 ? "x" : axis == 1 ? "y" : "z";
@@ -73,11 +79,18 @@ class PclScanReader final : public ScanReader {
       if (!xyz_[axis]) return Malformed(std::string("no '") + name + "' field in the " + ScanFormatName(format) + " file");
     }
     packed_rgb_ = Find({"rgb", "rgba"});
+    // Packed colors are read as 4 bytes; a 1- or 2-byte field called rgb is no packed color.
+    if (packed_rgb_ && pcl::getFieldSize(packed_rgb_->datatype) != 4) packed_rgb_ = std::nullopt;
     if (!packed_rgb_) {
       red_ = Find({"red", "r", "diffuse_red"});
       green_ = Find({"green", "g", "diffuse_green"});
       blue_ = Find({"blue", "b", "diffuse_blue"});
       if (!(red_ && green_ && blue_)) red_ = green_ = blue_ = std::nullopt;
+    }
+    for (const auto* field : {&xyz_[0], &xyz_[1], &xyz_[2], &packed_rgb_, &red_, &green_, &blue_}) {
+      if (*field && !FitsInPoint(**field)) {
+        return Malformed(std::string(ScanFormatName(format)) + " field '" + (*field)->name + "' lies outside its point");
+      }
     }
     info_.has_color = packed_rgb_.has_value() || red_.has_value();
     info_.stored_color_bits = 8;
@@ -118,6 +131,11 @@ class PclScanReader final : public ScanReader {
       }
     }
     return std::nullopt;
+  }
+
+  bool FitsInPoint(const pcl::PCLPointField& f) const {
+    const size_t size = pcl::getFieldSize(f.datatype);
+    return size != 0 && uint64_t{f.offset} + size <= cloud_.point_step;
   }
 
   // Float channels are either in [0,1] or already in [0,255]; decide once for the whole cloud.

@@ -1,0 +1,156 @@
+// The API's rules as Service::Handle applies them (the function the daemon's transport calls for
+// every request), over a real store in a scratch folder: token scopes, CORS, conditional requests,
+// the tile cache against DELETE. Configurations the daemon's flags do not reach yet are tested here.
+#include <gtest/gtest.h>
+
+#include "jobs.h"
+#include "metrics.h"
+#include "service.h"
+#include "store.h"
+#include "test_util.h"
+
+namespace pointdag::server {
+namespace {
+
+constexpr const char* kDataset = "d000000000000001";
+constexpr const char* kTile = "/v1/datasets/d000000000000001/tiles/0/0/0/0";
+
+// A store holding one dataset with one tile, and a service over it configured by the test.
+class ServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto opened = Store::Open(scratch_ / "store.sqlite");
+    ASSERT_TRUE(opened.ok()) << opened.status().ToString();
+    store_ = std::move(*opened);
+    JobRecord job;
+    job.id = "j000000000000001";
+    ASSERT_TRUE(store_->CreateJob(job).ok());
+    TileSet tiles;
+    tiles.levels = 1;
+    tiles.tiles.push_back({TileKey{0, 0, 0, 0}, 1, {1, 2, 3, 4, 5}});
+    ASSERT_TRUE(store_->CommitDataset(job.id, kDataset, "one", {{"id", kDataset}, {"tile_count", 1}}, tiles).ok());
+    jobs_ = std::make_unique<JobQueue>(*store_, metrics_, JobLimits{});
+  }
+  Service Make(ServiceConfig config) { return Service(*store_, *jobs_, metrics_, std::move(config)); }
+  static HttpRequest Get(const std::string& target, std::map<std::string, std::string> headers = {}) {
+    return HttpRequest{"GET", target, std::move(headers), ""};
+  }
+  static std::string HeaderOf(const HttpResponse& r, const std::string& name) {
+    for (const auto& [n, v] : r.headers) {
+      if (n == name) return v;
+    }
+    return "";
+  }
+
+  testing::ScratchDir scratch_;
+  std::unique_ptr<Store> store_;
+  Metrics metrics_;
+  std::unique_ptr<JobQueue> jobs_;
+};
+
+ServiceConfig Scoped(bool require_token_for_reads) {
+  ServiceConfig c;
+  c.token = "write-secret";
+  c.read_token = "read-secret";
+  c.require_token_for_reads = require_token_for_reads;
+  return c;
+}
+
+TEST_F(ServiceTest, TheReadTokenReadsButCannotWrite) {
+  Service service = Make(Scoped(false));
+  const HttpRequest del{"DELETE", "/v1/datasets/0000000000000000", {{"authorization", "Bearer read-secret"}}, ""};
+  const HttpResponse r = service.Handle(del);
+  EXPECT_EQ(r.status, 403);
+  EXPECT_NE(r.body.find("this token may only read"), std::string::npos) << r.body;
+  const HttpRequest upload{"POST", "/v1/datasets", {{"authorization", "Bearer read-secret"}, {"content-length", "10"}}, ""};
+  EXPECT_EQ(service.AdmitUpload(upload)->status, 403);
+  // Reads are open unless require_token_for_reads.
+  EXPECT_EQ(service.Handle(Get(kTile)).status, 200);
+  EXPECT_EQ(service.Handle(Get(kTile, {{"authorization", "Bearer read-secret"}})).status, 200);
+  // The write token writes.
+  EXPECT_EQ(service.Handle({"DELETE", "/v1/datasets/0000000000000000", {{"authorization", "Bearer write-secret"}}, ""}).status, 404);
+}
+
+TEST_F(ServiceTest, RequireTokenForReadsGuardsEveryReadButHealth) {
+  Service service = Make(Scoped(true));
+  service.set_ready(true);
+  for (const std::string& target : {std::string(kTile), std::string("/v1/datasets"), std::string("/v1/datasets/") + kDataset,
+                                   std::string("/v1/datasets/") + kDataset + "/hierarchy/0/0/0/0",
+                                   std::string("/v1/jobs/j000000000000001"), std::string("/metrics")}) {
+    const HttpResponse none = service.Handle(Get(target));
+    EXPECT_EQ(none.status, 401) << target;
+    EXPECT_EQ(HeaderOf(none, "WWW-Authenticate"), "Bearer") << target;
+    EXPECT_EQ(service.Handle(Get(target, {{"authorization", "Bearer wrong"}})).status, 401) << target;
+    EXPECT_EQ(service.Handle(Get(target, {{"authorization", "Bearer read-secret"}})).status, 200) << target;
+    EXPECT_EQ(service.Handle(Get(target, {{"authorization", "Bearer write-secret"}})).status, 200) << target;
+  }
+  EXPECT_EQ(service.Handle(Get("/livez")).status, 200);
+  EXPECT_EQ(service.Handle(Get("/readyz")).status, 200);
+  EXPECT_EQ(service.Handle({"OPTIONS", kTile, {}, ""}).status, 204);
+}
+
+TEST_F(ServiceTest, BearerIsCaseInsensitiveAndOnlyTheWholeTokenMatches) {
+  Service service = Make(Scoped(true));
+  EXPECT_EQ(service.Handle(Get(kTile, {{"authorization", "bearer read-secret"}})).status, 200);
+  EXPECT_EQ(service.Handle(Get(kTile, {{"authorization", "BEARER read-secret"}})).status, 200);
+  // Prefixes and extensions of a token, and another scheme, are refused.
+  for (const char* wrong : {"Bearer read-secre", "Bearer read-secret0", "Bearer ", "Basic read-secret", "read-secret"}) {
+    EXPECT_EQ(service.Handle(Get(kTile, {{"authorization", wrong}})).status, 401) << wrong;
+  }
+}
+
+TEST_F(ServiceTest, SeveralAuthorizationHeadersAre400) {
+  Service service = Make(Scoped(false));
+  // The transport joins repeated fields with ", ": neither the first nor the last may win.
+  for (const char* joined : {"Bearer read-secret, Bearer write-secret", "Bearer write-secret, Bearer read-secret"}) {
+    const HttpResponse r = service.Handle({"DELETE", std::string("/v1/datasets/") + kDataset, {{"authorization", joined}}, ""});
+    EXPECT_EQ(r.status, 400) << joined;
+    EXPECT_NE(r.body.find("one Authorization header"), std::string::npos) << r.body;
+  }
+  EXPECT_EQ(service.Handle(Get(std::string("/v1/datasets/") + kDataset)).status, 200);  // not deleted
+}
+
+TEST_F(ServiceTest, CorsEchoesOnlyListedOrigins) {
+  ServiceConfig config;
+  config.cors_origins = {"https://a.example", "https://b.example"};
+  Service service = Make(config);
+  HttpResponse r = service.Handle(Get(kTile, {{"origin", "https://b.example"}}));
+  EXPECT_EQ(HeaderOf(r, "Access-Control-Allow-Origin"), "https://b.example");
+  EXPECT_EQ(HeaderOf(r, "Vary"), "Origin");
+  EXPECT_NE(HeaderOf(r, "Access-Control-Expose-Headers").find("ETag"), std::string::npos);
+  r = service.Handle(Get(kTile, {{"origin", "https://evil.example"}}));
+  EXPECT_EQ(HeaderOf(r, "Access-Control-Allow-Origin"), "");
+  EXPECT_EQ(HeaderOf(r, "Vary"), "Origin");
+  r = service.Handle({"OPTIONS", kTile, {{"origin", "https://a.example"}}, ""});
+  EXPECT_EQ(HeaderOf(r, "Access-Control-Allow-Origin"), "https://a.example");
+  EXPECT_EQ(HeaderOf(service.Handle(Get("/nowhere", {{"origin", "https://a.example"}})), "Access-Control-Allow-Origin"),
+            "https://a.example");  // errors too
+
+  Service any = Make(ServiceConfig{});
+  r = any.Handle(Get(kTile, {{"origin", "https://evil.example"}}));
+  EXPECT_EQ(HeaderOf(r, "Access-Control-Allow-Origin"), "*");
+  EXPECT_EQ(HeaderOf(r, "Vary"), "");
+}
+
+TEST_F(ServiceTest, OnlyAWholeValueStarMatchesIfNoneMatch) {
+  Service service = Make(ServiceConfig{});
+  const std::string etag = HeaderOf(service.Handle(Get(kTile)), "ETag");
+  EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", "\"a*b\""}})).status, 200);
+  EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", "\"x\", *"}})).status, 200);
+  EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", " * "}})).status, 304);
+  EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", "\"x\", " + etag}})).status, 304);
+}
+
+TEST(TileCache, ATileReadBeforeAnEraseIsNotCachedAfterIt) {
+  TileCache cache(1 << 20);
+  auto tile = std::make_shared<const StoredTile>(StoredTile{"\"e\"", {1, 2, 3}});
+  const uint64_t read_at = cache.generation();  // a GET misses and reads the store ...
+  cache.EraseDataset("d1");                      // ... a DELETE of the dataset completes ...
+  cache.Put("d1/0/0/0/0", tile, read_at);        // ... and the GET's tile must not come back
+  EXPECT_EQ(cache.Get("d1/0/0/0/0"), nullptr);
+  cache.Put("d1/0/0/0/0", tile, cache.generation());
+  EXPECT_NE(cache.Get("d1/0/0/0/0"), nullptr);
+}
+
+}  // namespace
+}  // namespace pointdag::server
