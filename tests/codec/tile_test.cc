@@ -49,8 +49,9 @@ TEST(Tiler, LevelsHoldTheExactMeanOfTheVoxelsTheyCover) {
   }
   ASSERT_EQ(coarse.morton.size(), sums.size());
   size_t i = 0;
-  for (const auto& [code, s] : sums) {
+  for (const auto& [code, sum] : sums) {
     ASSERT_EQ(coarse.morton[i], code);
+    const auto& s = sum;  // clang 14 cannot capture a structured binding
     const auto mean = [&](int c) { return static_cast<uint8_t>((s[c] + s[3] / 2) / s[3]); };
     ASSERT_EQ(coarse.colors[i], (Rgb8{mean(0), mean(1), mean(2)})) << "voxel " << i;
     ++i;
