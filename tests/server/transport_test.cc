@@ -234,5 +234,90 @@ TEST(Transport, AcceptBacksOffWhenOutOfFileDescriptors) {
   EXPECT_EQ(LivezSoon(*daemon), 200);
 }
 
+// Polls until the daemon's uploads/ folder is empty (a session removes its file as it ends).
+bool UploadsEmptySoon(const Daemon& daemon) {
+  for (int i = 0; i < 100 && Uploads(daemon) > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  return Uploads(daemon) == 0;
+}
+
+std::string UploadHead(const std::string& framing) {
+  return Request("POST", "/v1/datasets", "Authorization: Bearer " + std::string(kToken) + "\r\n" + framing);
+}
+
+// Regression: uploads had no cap. Over it: 503 + Retry-After, before any body is stored.
+TEST(TransportUploads, ConcurrentUploadsAreCapped) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  auto daemon = StartDaemon(scratch, "max_uploads = 1\n");
+  RawSocket first(daemon->port());
+  first.Send(UploadHead("Content-Length: 1000000\r\n") + std::string(100, 'x'));
+  for (int i = 0; i < 100 && Uploads(*daemon) == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_EQ(Uploads(*daemon), 1u);
+  auto c = daemon->Connect();
+  const Response r = *c->Upload("/v1/datasets", TinyLas(), kAuth);
+  EXPECT_EQ(r.status, 503);
+  EXPECT_EQ(r.Header("retry-after"), "30");
+  EXPECT_EQ(Json(r)["error"], "the daemon takes 1 uploads at once; try again later");
+  first.Close();  // the client goes away mid-upload: its file goes too, and the slot is free again
+  EXPECT_TRUE(UploadsEmptySoon(*daemon));
+  c = daemon->Connect();
+  EXPECT_EQ(c->Upload("/v1/datasets", TinyLas(), kAuth)->status, 202);
+}
+
+// Regression: free disk was never checked; Content-Length + the reserve must fit before a byte is read.
+TEST(TransportUploads, AnUploadThatWouldFillTheDiskIsRefusedFirst) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  auto daemon = StartDaemon(scratch, "disk_reserve_mb = 1073741824\n");  // a petabyte must stay free
+  auto c = daemon->Connect();
+  const Response r = *c->Upload("/v1/datasets", TinyLas(), kAuth);
+  EXPECT_EQ(r.status, 507);
+  EXPECT_EQ(Json(r)["error"].get<std::string>().rfind("the daemon's disk is full: ", 0), 0u) << r.body;
+  EXPECT_EQ(Uploads(*daemon), 0u);
+}
+
+// Regression: running out of space while streaming was answered "400 malformed upload". The
+// uploads folder is a 1 MiB tmpfs in the daemon's own mount namespace (unshare), and a chunked
+// body (no Content-Length to check first) outgrows it.
+TEST(TransportUploads, OutOfSpaceWhileStreamingIs507AndFreesTheSpace) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  const auto uploads = scratch / "var" / "uploads";
+  std::filesystem::create_directories(uploads);
+  auto daemon = StartDaemon(scratch, "disk_reserve_mb = 0\n", [&](Daemon& d) {
+    d.RunUnder({"unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=1m tmpfs \"$0\" && exec \"$@\"", uploads.string()});
+  });
+  RawSocket s(daemon->port());
+  std::string body = UploadHead("Transfer-Encoding: chunked\r\n");
+  const std::string chunk(64 * 1024, 'x');
+  for (int i = 0; i < 32; ++i) body += "10000\r\n" + chunk + "\r\n";
+  body += "0\r\n\r\n";
+  std::thread sender([&] { s.Send(body); });  // fails once the daemon closes
+  const auto read = s.ReadResponse(30);
+  sender.join();
+  EXPECT_EQ(read.bytes.rfind("HTTP/1.1 507", 0), 0u) << read.bytes.substr(0, 300);
+  EXPECT_NE(read.bytes.find("\"error\": \"the daemon's disk is full\""), std::string::npos) << read.bytes.substr(0, 300);
+  // The partial file was removed: the small tmpfs takes a whole scan again.
+  auto c = daemon->Connect();
+  const Response r = *c->Upload("/v1/datasets", TinyLas(), kAuth);
+  EXPECT_EQ(r.status, 202) << r.body;
+}
+
+// Regression: an upload had 30 minutes however slowly it came. Now each window (1 s here) must
+// bring upload_min_rate × window bytes; a trickle is cut off and its file removed.
+TEST(TransportUploads, AnUploadBelowTheMinimumRateIsCutOff) {
+  testing::ScratchDir scratch;
+  auto daemon = StartDaemon(scratch, "upload_min_rate = 1000\nupload_rate_window_s = 1\n");
+  RawSocket s(daemon->port());
+  s.Send(UploadHead("Content-Length: 100000\r\n"));
+  bool closed = false;
+  for (int i = 0; i < 100 && !closed; ++i) {  // 50 bytes/s, for at most 20 s
+    closed = !s.Send(std::string(10, 'x')) || s.ReadUntil(0.2, [](const std::string&) { return false; }).closed;
+  }
+  EXPECT_TRUE(closed);
+  EXPECT_TRUE(UploadsEmptySoon(*daemon));
+  EXPECT_NE(daemon->Log().find("upload cut off: less than 1000 bytes in 1 s"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace pointdag
