@@ -28,8 +28,7 @@ void Daemon::Start() {
   pid_ = fork();
   if (pid_ == 0) {
     std::vector<std::string> args = wrapper_;
-    for (const char* a : {POINTDAGD, "--listen", "127.0.0.1:0", "--data-dir"}) args.emplace_back(a);
-    args.insert(args.end(), {(data_dir_ / "var").string(), "--port-file", port_file.string()});
+    args.insert(args.end(), {POINTDAGD, "--listen", host_ + ":0", "--data-dir", (data_dir_ / "var").string(), "--port-file", port_file.string()});
     if (token_flag_) args.insert(args.end(), {"--token", kToken});
     args.insert(args.end(), extra_.begin(), extra_.end());
     for (const auto& [name, value] : env_) setenv(name.c_str(), value.c_str(), 1);

@@ -30,9 +30,10 @@ class Daemon {
       : data_dir_(std::move(data_dir)), extra_(std::move(extra)) {}
   ~Daemon() { Stop(SIGKILL); }
 
-  // Before Start(): no --token flag; a limit on open files; a command the daemon runs under (its
+  // Before Start(): no --token flag; another address than 127.0.0.1 (any port); a limit on open files; a command the daemon runs under (its
   // argv is appended: e.g. unshare for a private mount); an environment variable.
   void WithoutTokenFlag() { token_flag_ = false; }
+  void ListenOn(std::string host) { host_ = std::move(host); }
   void LimitOpenFiles(int limit) { open_files_ = limit; }
   void RunUnder(std::vector<std::string> wrapper) { wrapper_ = std::move(wrapper); }
   void SetEnv(std::string name, std::string value) { env_.emplace_back(std::move(name), std::move(value)); }
@@ -50,6 +51,7 @@ class Daemon {
   std::filesystem::path data_dir_;
   std::vector<std::string> extra_;
   bool token_flag_ = true;
+  std::string host_ = "127.0.0.1";
   std::optional<int> open_files_;
   std::vector<std::string> wrapper_;
   std::vector<std::pair<std::string, std::string>> env_;
