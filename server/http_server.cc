@@ -200,6 +200,7 @@ asio::awaitable<void> HttpServer::Impl::Session(tcp::socket socket, Slot connect
   }
   beast::error_code ec;
   stream.socket().shutdown(tcp::socket::shutdown_send, ec);
+  // `connection` and `client` are held, not used: their counts drop as this frame ends.
   (void)connection;
   (void)client;
 }
