@@ -3,9 +3,84 @@
 #include <toml++/toml.h>
 
 #include <charconv>
+#include <fstream>
+#include <limits>
 #include <set>
+#include <sstream>
 
 namespace pointdag::server {
+namespace {
+
+// One TOML table read key by key; every key read is marked, so the rest are unknown.
+class Reader {
+ public:
+  Reader(const toml::table& table, const std::string& origin) : table_(table), origin_(origin) {}
+
+  template <typename T>
+  Status Int(const char* key, T& out, int64_t min, int64_t max) {
+    const toml::node* node = Find(key);
+    if (!node) return Status::Ok();
+    const auto value = node->value_exact<int64_t>();
+    if (!value) return Wrong(key, "an integer");
+    if (*value < min || *value > max) {
+      return InvalidArgument(origin_ + ": " + key + " must be between " + std::to_string(min) + " and " + std::to_string(max));
+    }
+    out = static_cast<T>(*value);
+    return Status::Ok();
+  }
+  Status String(const char* key, std::string& out) {
+    const toml::node* node = Find(key);
+    if (!node) return Status::Ok();
+    const auto value = node->value_exact<std::string>();
+    if (!value) return Wrong(key, "a string");
+    out = *value;
+    return Status::Ok();
+  }
+  Status Bool(const char* key, bool& out) {
+    const toml::node* node = Find(key);
+    if (!node) return Status::Ok();
+    const auto value = node->value_exact<bool>();
+    if (!value) return Wrong(key, "true or false");
+    out = *value;
+    return Status::Ok();
+  }
+  Status Strings(const char* key, std::vector<std::string>& out) {
+    const toml::node* node = Find(key);
+    if (!node) return Status::Ok();
+    const toml::array* array = node->as_array();
+    if (!array || array->empty()) return Wrong(key, "a non-empty array of strings");
+    std::vector<std::string> values;
+    for (const toml::node& item : *array) {
+      const auto value = item.value_exact<std::string>();
+      if (!value) return Wrong(key, "a non-empty array of strings");
+      values.push_back(*value);
+    }
+    out = std::move(values);
+    return Status::Ok();
+  }
+  Status CheckAllRead() const {
+    for (const auto& [key, value] : table_) {
+      if (!read_.count(std::string(key.str()))) return InvalidArgument(origin_ + ": unknown key '" + std::string(key.str()) + "'");
+    }
+    return Status::Ok();
+  }
+
+ private:
+  const toml::node* Find(const char* key) {
+    read_.insert(key);
+    return table_.get(key);
+  }
+  Status Wrong(const char* key, const char* what) const { return InvalidArgument(origin_ + ": " + key + " must be " + what); }
+
+  const toml::table& table_;
+  const std::string& origin_;
+  std::set<std::string> read_;
+};
+
+constexpr int64_t kInt = std::numeric_limits<int>::max();
+constexpr int64_t kHour = 3600;
+
+}  // namespace
 
 Status ParseListen(const std::string& listen, DaemonConfig& config) {
   const size_t colon = listen.rfind(':');
@@ -19,32 +94,59 @@ Status ParseListen(const std::string& listen, DaemonConfig& config) {
   return Status::Ok();
 }
 
-Status LoadConfigFile(const std::filesystem::path& file, DaemonConfig& config) {
+Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::string& origin) {
   toml::table table;
   try {
-    table = toml::parse_file(file.string());
+    table = toml::parse(text, origin);
   } catch (const toml::parse_error& e) {
-    return InvalidArgument(file.string() + ": " + std::string(e.description()));
+    return InvalidArgument(origin + ": " + std::string(e.description()));
   }
-  static const std::set<std::string> known = {"listen", "data_dir", "token", "workers", "http_threads", "queue_size",
-                                              "max_upload_bytes", "tile_cache_mb", "cors_origin", "log_level"};
-  for (const auto& [key, value] : table) {
-    if (!known.count(std::string(key.str()))) return InvalidArgument(file.string() + ": unknown key '" + std::string(key.str()) + "'");
-  }
-  if (auto v = table["listen"].value<std::string>()) RETURN_IF_ERROR(ParseListen(*v, config));
-  if (auto v = table["data_dir"].value<std::string>()) config.data_dir = *v;
-  if (auto v = table["token"].value<std::string>()) config.token = *v;
-  if (auto v = table["workers"].value<int64_t>()) config.workers = static_cast<int>(*v);
-  if (auto v = table["http_threads"].value<int64_t>()) config.http_threads = static_cast<int>(*v);
-  if (auto v = table["queue_size"].value<int64_t>()) config.queue_size = static_cast<size_t>(*v);
-  if (auto v = table["max_upload_bytes"].value<int64_t>()) config.max_upload_bytes = static_cast<uint64_t>(*v);
-  if (auto v = table["tile_cache_mb"].value<int64_t>()) config.tile_cache_mb = static_cast<size_t>(*v);
-  if (auto v = table["cors_origin"].value<std::string>()) config.cors_origin = *v;
-  if (auto v = table["log_level"].value<std::string>()) config.log_level = *v;
-  if (config.workers < 1 || config.http_threads < 1 || config.queue_size < 1) {
-    return InvalidArgument(file.string() + ": workers, http_threads and queue_size must be at least 1");
-  }
-  return Status::Ok();
+  Reader r(table, origin);
+  std::string listen, data_dir, token_file;
+  RETURN_IF_ERROR(r.String("listen", listen));
+  if (!listen.empty()) RETURN_IF_ERROR(ParseListen(listen, config));
+  RETURN_IF_ERROR(r.String("data_dir", data_dir));
+  if (!data_dir.empty()) config.data_dir = data_dir;
+  RETURN_IF_ERROR(r.String("token", config.token));
+  RETURN_IF_ERROR(r.String("token_file", token_file));
+  if (!token_file.empty()) config.token_file = token_file;
+  RETURN_IF_ERROR(r.String("read_token", config.read_token));
+  RETURN_IF_ERROR(r.Bool("require_token_for_reads", config.require_token_for_reads));
+  RETURN_IF_ERROR(r.Int("workers", config.workers, 1, 256));
+  RETURN_IF_ERROR(r.Int("http_threads", config.http_threads, 1, 256));
+  RETURN_IF_ERROR(r.Int("queue_size", config.queue_size, 1, 1 << 20));
+  RETURN_IF_ERROR(r.Int("max_attempts", config.max_attempts, 1, 100));
+  RETURN_IF_ERROR(r.Int("max_upload_bytes", config.max_upload_bytes, 1, std::numeric_limits<int64_t>::max()));
+  RETURN_IF_ERROR(r.Int("tile_cache_mb", config.tile_cache_mb, 0, 1 << 20));
+  RETURN_IF_ERROR(r.Strings("cors_origins", config.cors_origins));
+  RETURN_IF_ERROR(r.String("log_level", config.log_level));
+  static const std::set<std::string> levels = {"trace", "debug", "info", "warn", "error", "critical", "off"};
+  if (!levels.count(config.log_level)) return InvalidArgument(origin + ": log_level must be trace, debug, info, warn, error, critical or off");
+  HttpLimits& h = config.http;
+  RETURN_IF_ERROR(r.Int("max_connections", h.max_connections, 1, 1 << 20));
+  RETURN_IF_ERROR(r.Int("max_connections_per_client", h.max_connections_per_client, 1, 1 << 20));
+  RETURN_IF_ERROR(r.Int("max_uploads", h.max_uploads, 1, 1 << 16));
+  RETURN_IF_ERROR(r.Int("header_timeout_s", h.header_timeout_s, 1, kHour));
+  RETURN_IF_ERROR(r.Int("idle_timeout_s", h.idle_timeout_s, 1, kHour));
+  RETURN_IF_ERROR(r.Int("body_timeout_s", h.body_timeout_s, 1, kHour));
+  RETURN_IF_ERROR(r.Int("write_timeout_s", h.write_timeout_s, 1, kHour));
+  RETURN_IF_ERROR(r.Int("max_header_bytes", h.max_header_bytes, 1024, 1 << 20));
+  RETURN_IF_ERROR(r.Int("max_header_fields", h.max_header_fields, 8, 10000));
+  RETURN_IF_ERROR(r.Int("upload_min_rate", h.upload_min_rate, 0, kInt));
+  RETURN_IF_ERROR(r.Int("upload_rate_window_s", h.upload_rate_window_s, 1, kHour));
+  int64_t reserve_mb = static_cast<int64_t>(h.disk_reserve_bytes >> 20);
+  RETURN_IF_ERROR(r.Int("disk_reserve_mb", reserve_mb, 0, int64_t{1} << 30));
+  h.disk_reserve_bytes = static_cast<uint64_t>(reserve_mb) << 20;
+  RETURN_IF_ERROR(r.Int("check_threads", h.check_threads, 1, 64));
+  return r.CheckAllRead();
+}
+
+Status LoadConfigFile(const std::filesystem::path& file, DaemonConfig& config) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return IoError("cannot read " + file.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseConfigText(text.str(), config, file.string());
 }
 
 }  // namespace pointdag::server

@@ -1,31 +1,59 @@
-// pointdagd's configuration: the embedded defaults, then a TOML file (toml++), then flags (CLI11).
+// pointdagd's configuration: the embedded defaults, then a TOML file (toml++), then the
+// environment (tokens), then flags (CLI11). configs/pointdagd.toml documents every key.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "pointdag/status.h"
 
 namespace pointdag::server {
 
+// What one connection may cost the daemon, phase by phase (http_server.cc).
+struct HttpLimits {
+  int max_connections = 1024;          // beyond it a new connection gets 503 and is closed
+  int max_connections_per_client = 256;  // per remote address, so one client cannot take them all
+  int max_uploads = 4;                 // uploads streaming at once; beyond it 503 + Retry-After
+  int header_timeout_s = 30;           // from a request's first byte to the end of its header
+  int idle_timeout_s = 60;             // keep-alive: waiting for the next request's first byte
+  int body_timeout_s = 30;             // a small (non-upload) request body
+  int write_timeout_s = 60;            // writing one response (a client that does not read it)
+  uint32_t max_header_bytes = 16 * 1024;
+  uint32_t max_header_fields = 100;
+  uint64_t upload_min_rate = 16 * 1024;  // bytes/s an upload must keep, measured over the window
+  int upload_rate_window_s = 30;
+  uint64_t disk_reserve_bytes = uint64_t{256} << 20;  // free space an upload must leave on the data disk
+  int check_threads = 2;               // threads that check uploads (off the HTTP threads)
+};
+
 struct DaemonConfig {
   std::string host = "127.0.0.1";
   uint16_t port = 8080;
   std::filesystem::path data_dir = "./var";
-  std::string token;                      // empty: no token needed for writes
+  std::string token;                      // write scope; empty: no token needed for writes
+  std::filesystem::path token_file;       // the token read from a file instead (first line)
+  std::string read_token;                 // read scope only
+  bool require_token_for_reads = false;
   int workers = 1;                        // ingest threads (each also uses the tile encoder's threads)
   int http_threads = 2;                   // threads serving HTTP
   size_t queue_size = 16;                 // jobs waiting beyond the running ones
+  int max_attempts = 2;                   // a job that failed or crashed this often is not resumed
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   size_t tile_cache_mb = 256;
-  std::string cors_origin = "*";
+  std::vector<std::string> cors_origins{"*"};
   std::string log_level = "info";
   std::filesystem::path port_file;        // where to write the bound port (for --listen HOST:0)
+  HttpLimits http;
 };
 
 // "HOST:PORT" -> host and port.
 Status ParseListen(const std::string& listen, DaemonConfig& config);
-// Reads a TOML file over `config`; unknown keys are an error, so typos do not pass silently.
+// Reads TOML text over `config`; unknown keys, wrong types and out-of-range values are errors, so
+// typos do not pass silently. `origin` names the text in messages.
+Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::string& origin = "config");
 Status LoadConfigFile(const std::filesystem::path& file, DaemonConfig& config);
 
 }  // namespace pointdag::server

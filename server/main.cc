@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 #include "check.h"
@@ -11,21 +12,51 @@
 #include "pointdag/pipeline.h"
 #include "http_server.h"
 #include "jobs.h"
+#include "startup.h"
 #include "service.h"
 #include "store.h"
 
 using namespace pointdag;
 using namespace pointdag::server;
 
+namespace {
+
+int Fail(int code, const Status& status) {
+  std::fprintf(stderr, "pointdagd: %s\n", status.ToString().c_str());
+  return code;
+}
+
+// The write token from the first source that has one: --token, --token-file, POINTDAGD_TOKEN,
+// then the config's token_file and token.
+Status ResolveTokens(DaemonConfig& config, const std::string& token_flag, const std::string& token_file_flag) {
+  const char* env_token = std::getenv("POINTDAGD_TOKEN");
+  if (!token_flag.empty()) {
+    config.token = token_flag;
+  } else if (!token_file_flag.empty()) {
+    ASSIGN_OR_RETURN(config.token, ReadTokenFile(token_file_flag));
+  } else if (env_token && *env_token) {
+    config.token = env_token;
+  } else if (!config.token_file.empty()) {
+    ASSIGN_OR_RETURN(config.token, ReadTokenFile(config.token_file));
+  }
+  if (const char* env_read = std::getenv("POINTDAGD_READ_TOKEN"); env_read && *env_read) config.read_token = env_read;
+  return Status::Ok();
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"pointdagd: upload scans over HTTP, serve tiled LOD SVDAGs"};
-  std::string config_file, listen, data_dir, token, port_file;
+  std::string config_file, listen, data_dir, token, token_file, port_file;
   int workers = 0;
   bool check = false;
+  bool no_token = false;
   app.add_option("--config", config_file, "TOML configuration (configs/pointdagd.toml)");
   app.add_option("--listen", listen, "HOST:PORT (port 0: any free port)");
   app.add_option("--data-dir", data_dir, "where the store, uploads and spill files live");
-  app.add_option("--token", token, "bearer token required for writes");
+  app.add_option("--token", token, "bearer token required for writes (visible in ps: prefer --token-file or POINTDAGD_TOKEN)");
+  app.add_option("--token-file", token_file, "read the write token from this file's first line");
+  app.add_flag("--no-token", no_token, "allow listening beyond loopback without a token");
   app.add_option("--workers", workers, "concurrent ingest jobs")->check(CLI::Range(1, 64));
   app.add_option("--port-file", port_file, "write the bound port here once listening");
   app.add_flag("--check", check, "check the store in --data-dir and exit: 0 consistent, 1 with a report");
@@ -33,28 +64,24 @@ int main(int argc, char** argv) {
 
   DaemonConfig config;
   if (!config_file.empty()) {
-    if (const Status s = LoadConfigFile(config_file, config); !s.ok()) {
-      std::fprintf(stderr, "pointdagd: %s\n", s.ToString().c_str());
-      return 2;
-    }
+    if (const Status s = LoadConfigFile(config_file, config); !s.ok()) return Fail(2, s);
   }
   if (!listen.empty()) {
-    if (const Status s = ParseListen(listen, config); !s.ok()) {
-      std::fprintf(stderr, "pointdagd: %s\n", s.ToString().c_str());
-      return 2;
-    }
+    if (const Status s = ParseListen(listen, config); !s.ok()) return Fail(2, s);
   }
   if (!data_dir.empty()) config.data_dir = data_dir;
-  if (!token.empty()) config.token = token;
   if (workers > 0) config.workers = workers;
   if (!port_file.empty()) config.port_file = port_file;
-  spdlog::set_level(spdlog::level::from_str(config.log_level));
   if (check) {
     const auto report = CheckDataDir(config.data_dir);
-    if (!report.ok()) std::fprintf(stderr, "pointdagd: %s\n", report.status().ToString().c_str());
-    if (report.ok()) std::printf("%s", report->ToString().c_str());
-    return report.ok() && report->ok() ? 0 : 1;
+    if (!report.ok()) return Fail(1, report.status());
+    std::printf("%s", report->ToString().c_str());
+    return report->ok() ? 0 : 1;
   }
+  if (const Status s = ResolveTokens(config, token, token_file); !s.ok()) return Fail(2, s);
+  if (const Status s = CheckExposure(config, no_token); !s.ok()) return Fail(2, s);
+  spdlog::set_level(spdlog::level::from_str(config.log_level));
+  RaiseOpenFileLimit();
 
   std::error_code ec;
   std::filesystem::create_directories(config.data_dir / "uploads", ec);
@@ -64,15 +91,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   auto store = Store::Open(config.data_dir / "store.sqlite");
-  if (!store.ok()) {
-    std::fprintf(stderr, "pointdagd: %s\n", store.status().ToString().c_str());
-    return 1;
+  if (!store.ok()) return Fail(1, store.status());
+  if (const size_t swept = SweepLeftovers(**store, config.data_dir); swept > 0) {
+    spdlog::info("swept {} file(s) a previous run left in uploads/ and spill/", swept);
   }
   // Where the heavy stages run (POINTDAG_DEVICE; under auto, the faster path measured now).
-  if (const Status s = ChooseStageDevices(); !s.ok()) {
-    std::fprintf(stderr, "pointdagd: %s\n", s.ToString().c_str());
-    return 2;
-  }
+  if (const Status s = ChooseStageDevices(); !s.ok()) return Fail(2, s);
   spdlog::info("stages: {}", gpu::DescribeDevices());
   Metrics metrics;
   std::vector<Metrics::StageDevice> stages;
@@ -85,20 +109,20 @@ int main(int argc, char** argv) {
   limits.capacity = config.queue_size;
   limits.spill_dir = config.data_dir / "spill";
   limits.upload_dir = config.data_dir / "uploads";
+  limits.max_attempts = config.max_attempts;
   JobQueue jobs(**store, metrics, limits);
   ServiceConfig service_config;
   service_config.token = config.token;
+  service_config.read_token = config.read_token;
+  service_config.require_token_for_reads = config.require_token_for_reads;
   service_config.max_upload_bytes = config.max_upload_bytes;
   service_config.upload_dir = config.data_dir / "uploads";
-  service_config.cors_origins = {config.cors_origin};
+  service_config.cors_origins = config.cors_origins;
   service_config.tile_cache_bytes = config.tile_cache_mb << 20;
   Service service(**store, jobs, metrics, service_config);
-  HttpServer server(service, metrics, config.http_threads);
+  HttpServer server(service, metrics, config.http_threads, config.http);
   auto port = server.Listen(config.host, config.port);
-  if (!port.ok()) {
-    std::fprintf(stderr, "pointdagd: %s\n", port.status().ToString().c_str());
-    return 1;
-  }
+  if (!port.ok()) return Fail(1, port.status());
   jobs.Resume();
   service.set_ready(true);
   if (!config.port_file.empty()) {
@@ -106,8 +130,12 @@ int main(int argc, char** argv) {
     std::ofstream(partial) << *port << "\n";
     std::filesystem::rename(partial, config.port_file, ec);
   }
-  spdlog::info("pointdagd listening on http://{}:{} (data in {}, {} worker(s){})", config.host, *port,
-               config.data_dir.string(), config.workers, config.token.empty() ? ", no token" : ", token required for writes");
+  // Which tokens are set, never their values.
+  const char* access = config.token.empty()              ? "no token"
+                       : config.require_token_for_reads ? "token required for reads and writes"
+                                                        : "token required for writes";
+  spdlog::info("pointdagd listening on http://{}:{} (data in {}, {} worker(s), {}{})", config.host, *port,
+               config.data_dir.string(), config.workers, access, config.read_token.empty() ? "" : ", read token set");
   server.Run();
   if (jobs.running() > 0) {
     // An ingest cannot be interrupted midway; its job resumes from the upload on the next start,

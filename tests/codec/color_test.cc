@@ -228,7 +228,8 @@ TEST(AstcMapping, MeetsTargetStoresOnlyUsedBlocksAndRejectsLies) {
   auto payload = EncodeColorAstc(colors, Curve::kMorton, 4);
   ASSERT_TRUE(payload.ok());
   EXPECT_EQ(payload->size(), 3u + 63u * 16u);
-  auto exact_fit = EncodeColorAstc(std::span(colors).first(1024 - 16), Curve::kMorton, 4);
+  // (Its own 1008 colors: a span of the first 1008 of 1000 read past the vector, found by ASan.)
+  auto exact_fit = EncodeColorAstc(SyntheticColors(1024 - 16, 3), Curve::kMorton, 4);
   ASSERT_TRUE(exact_fit.ok());
   EXPECT_EQ(exact_fit->size(), 3u + 63u * 16u);
   EXPECT_TRUE(DecodeColorAstc(*payload, colors.size()).ok());

@@ -28,8 +28,10 @@ class ServerTest : public ::testing::Test {
     dir_ = std::filesystem::temp_directory_path() / ("pointdagd-test-" + std::to_string(getpid()));
     std::filesystem::remove_all(dir_);
     daemon_ = new Daemon(dir_);
-    daemon_->Start();
+    (void)daemon_->Start();  // a failure is recorded; SetUp() fails each test
   }
+  // Every test fails (never skips) when the suite's daemon did not start.
+  void SetUp() override { ASSERT_TRUE(daemon_->started()) << "the suite's pointdagd did not start"; }
   static void TearDownTestSuite() {
     delete daemon_;
     std::filesystem::remove_all(dir_);
@@ -255,7 +257,7 @@ TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
   SKIP_WITHOUT_DATA();
   testing::ScratchDir scratch;
   Daemon daemon(scratch.path());
-  daemon.Start();
+  ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
   ASSERT_EQ(r->status, 202);
@@ -271,7 +273,7 @@ TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM tiles"), 0);
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM jobs WHERE state = 'running'"), 1);
 
-  daemon.Start();
+  ASSERT_TRUE(daemon.Start());
   c = daemon.Connect();
   const nlohmann::json job = WaitForJob(*c, location);
   EXPECT_EQ(job["status"], "done") << job.dump();
@@ -312,7 +314,7 @@ TEST(ServerJobs, AJobThatThrowsEndsFailedAndTheDaemonLives) {
   SKIP_WITHOUT_DATA();
   testing::ScratchDir scratch;
   Daemon daemon(scratch.path());
-  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  ASSERT_TRUE(daemon.Start());
   daemon.Stop(SIGTERM);
   const auto upload = scratch.path() / "var" / "uploads" / "thrower.upload";
   std::filesystem::copy_file(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", upload);
@@ -320,7 +322,7 @@ TEST(ServerJobs, AJobThatThrowsEndsFailedAndTheDaemonLives) {
                       "INSERT INTO jobs (id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, "
                       "params, created, updated) VALUES ('00000000000000aa', 'queued', 'queued', 0, 0, 0, '', '', '" +
                           upload.string() + "', '{\"name\": \"x\", \"voxel\": \"ten\"}', 0, 0)"));
-  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   ASSERT_NE(c, nullptr);
   const nlohmann::json job = WaitForJob(*c, "/v1/jobs/00000000000000aa");
@@ -338,7 +340,7 @@ TEST(ServerJobs, AJobInterruptedTwiceIsNotResumedAThirdTime) {
   SKIP_WITHOUT_DATA();
   testing::ScratchDir scratch;
   Daemon daemon(scratch.path());
-  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   ASSERT_NE(c, nullptr);
   auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
@@ -348,7 +350,7 @@ TEST(ServerJobs, AJobInterruptedTwiceIsNotResumedAThirdTime) {
     WaitUntilRunning(*c, location);
     daemon.Stop(SIGKILL);
     EXPECT_EQ(Count(daemon.store(), "SELECT attempts FROM jobs"), crash);
-    ASSERT_NO_FATAL_FAILURE(daemon.Start());
+    ASSERT_TRUE(daemon.Start());
     c = daemon.Connect();
     ASSERT_NE(c, nullptr);
   }
@@ -377,7 +379,7 @@ TEST(ServerJobs, AStoreWithoutTheAttemptsColumnIsMigrated) {
             SQLITE_OK);
   sqlite3_close(db);
   Daemon daemon(scratch.path());
-  ASSERT_NO_FATAL_FAILURE(daemon.Start());
+  ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   ASSERT_NE(c, nullptr);
   const nlohmann::json job = Json(*c->Request("GET", "/v1/jobs/00000000000000bb"));
