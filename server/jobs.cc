@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <set>
 #include <thread>
 
 #include "pointdag/ingest.h"
@@ -84,7 +83,6 @@ void JobQueue::Resume() {
     spdlog::error("cannot resume the jobs of a previous run: {}", jobs.status().ToString());
     return;
   }
-  std::set<std::filesystem::path> referenced;
   for (const JobRecord& job : *jobs) {
     if (job.attempts >= std::max(1, limits_.max_attempts)) {
       Fail(job.id, "interrupted " + std::to_string(job.attempts) +
@@ -95,7 +93,6 @@ void JobQueue::Resume() {
       Fail(job.id, "the daemon stopped during this job and its upload is gone", job.upload_path);
       continue;
     }
-    referenced.insert(job.upload_path);
     (void)store_.UpdateJobProgress(job.id, "resumed", 0, 0, 0);
     (void)store_.SetJobState(job.id, "queued");
     spdlog::info("job {}: resumed after a restart (started {} time(s) before)", job.id, job.attempts);
@@ -103,15 +100,6 @@ void JobQueue::Resume() {
     queue_.push_back(job.id);
   }
   wake_.notify_all();
-  // Uploads a crash cut short (or left between the body and its job) belong to no job.
-  std::error_code ec;
-  if (limits_.upload_dir.empty()) return;
-  for (const auto& entry : std::filesystem::directory_iterator(limits_.upload_dir, ec)) {
-    if (referenced.count(entry.path())) continue;
-    std::error_code ignored;
-    std::filesystem::remove(entry.path(), ignored);
-    spdlog::info("removed {}: an upload no job references", entry.path().string());
-  }
 }
 
 bool JobQueue::Submit(const std::string& job_id) {

@@ -34,7 +34,6 @@ struct JobLimits {
   int workers = 1;
   size_t capacity = 16;
   std::filesystem::path spill_dir;
-  std::filesystem::path upload_dir;  // swept of unreferenced files by Resume(); empty: not swept
   uint64_t max_points_in_memory = uint64_t{1} << 25;
   int max_attempts = 2;  // a job that failed or took the process down this often is not resumed again
 };

@@ -108,7 +108,6 @@ int main(int argc, char** argv) {
   limits.workers = config.workers;
   limits.capacity = config.queue_size;
   limits.spill_dir = config.data_dir / "spill";
-  limits.upload_dir = config.data_dir / "uploads";
   limits.max_attempts = config.max_attempts;
   JobQueue jobs(**store, metrics, limits);
   ServiceConfig service_config;

@@ -33,14 +33,18 @@ Status CheckExposure(const DaemonConfig& config, bool no_token) {
 size_t SweepLeftovers(Store& store, const std::filesystem::path& data_dir) {
   // By file name: the data folder may be spelt differently from one start to the next.
   std::set<std::filesystem::path> in_use;
-  for (const JobRecord& job : store.JobsInStates({"queued", "running"})) {
-    if (!job.upload_path.empty()) in_use.insert(std::filesystem::path(job.upload_path).filename());
+  const auto jobs = store.JobsInStates({"queued", "running"});
+  if (jobs.ok()) {
+    for (const JobRecord& job : *jobs) {
+      if (!job.upload_path.empty()) in_use.insert(std::filesystem::path(job.upload_path).filename());
+    }
   }
   size_t removed = 0;
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(data_dir / "spill", ec)) {
     removed += std::filesystem::remove_all(entry.path(), ec) > 0 ? 1 : 0;
   }
+  if (!jobs.ok()) return removed;  // which uploads are in use is unknown: keep them all
   for (const auto& entry : std::filesystem::directory_iterator(data_dir / "uploads", ec)) {
     if (in_use.count(entry.path().filename())) continue;
     removed += std::filesystem::remove_all(entry.path(), ec) > 0 ? 1 : 0;

@@ -167,7 +167,9 @@ TEST_F(FaultTest, ADiskFullFailsTheJobAndKeepsWhatWasStored) {
     std::filesystem::path dir;
     ~Unmount() { umount2(dir.c_str(), MNT_DETACH); }
   } unmount{var()};
-  Daemon daemon(scratch_.path());  // stopped before the unmount
+  // No free-space reserve, so the uploads reach the disk and the commit is what runs out of space.
+  std::ofstream(scratch_ / "pointdagd.toml") << "disk_reserve_mb = 0\n";
+  Daemon daemon(scratch_.path(), {"--config", (scratch_ / "pointdagd.toml").string()});  // stopped before the unmount
   ASSERT_TRUE(daemon.Start());
   const nlohmann::json first = Ingest(daemon, "tiny_1.2-with-color_1065pts.las", "voxel=10");
   ASSERT_EQ(first["status"], "done") << first.dump();
@@ -196,7 +198,8 @@ TEST_F(FaultTest, ADiskFullFailsTheJobAndKeepsWhatWasStored) {
   EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
   c = daemon.Connect();
   auto refused = c->Upload("/v1/datasets", testing::DataDir() / "autzen_trim_pdrf3_rgb.las", kAuth);
-  EXPECT_TRUE(!refused.ok() || refused->status != 202);
+  ASSERT_TRUE(refused.ok()) << refused.status().ToString();
+  EXPECT_EQ(refused->status, 507) << refused->body;
   c = daemon.Connect();
   EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
 
