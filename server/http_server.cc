@@ -395,7 +395,8 @@ asio::awaitable<void> HttpServer::Impl::Accept() {
   bool failing = false;
   for (;;) {
     beast::error_code ec;
-    tcp::socket socket = co_await acceptor.async_accept(asio::make_strand(io), asio::redirect_error(asio::use_awaitable, ec));
+    // The socket takes the io_context's executor; each session runs on a strand of its own (below).
+    tcp::socket socket = co_await acceptor.async_accept(asio::redirect_error(asio::use_awaitable, ec));
     if (ec) {
       if (!acceptor.is_open()) co_return;
       // Out of file descriptors (or another passing failure): retrying at once would spin a core
@@ -422,8 +423,7 @@ asio::awaitable<void> HttpServer::Impl::Accept() {
       metrics.CountRequest("connection", 503, 0, 0);
       continue;
     }
-    const auto executor = socket.get_executor();
-    asio::co_spawn(executor, Session(std::move(socket), std::move(*connection), std::move(*client)), asio::detached);
+    asio::co_spawn(asio::make_strand(io), Session(std::move(socket), std::move(*connection), std::move(*client)), asio::detached);
   }
 }
 
