@@ -52,8 +52,8 @@ bool Daemon::Start() {
     int status = 0;
     if (waitpid(pid_, &status, WNOHANG) == pid_) {
       pid_ = -1;
-      // Not ASSERT: a fatal failure inside SetUpTestSuite makes gtest skip the suite's tests, and
-      // ctest reports such tests as "Skipped". Callers check started() and fail each test instead.
+      // A recorded failure and false, not ASSERT (which would only leave this helper): callers
+      // ASSERT on the result, so the test itself fails.
       ADD_FAILURE() << "pointdagd exited during start (status " << status << "):\n" << Log();
       return false;
     }
