@@ -159,4 +159,10 @@ nlohmann::json WaitForJob(client::Connection& c, const std::string& location) {
   return job;
 }
 
+std::string SubmitScan(client::Connection& c, const std::string& scan, const std::string& query) {
+  const auto posted = c.Upload("/v1/datasets?" + query, testing::DataDir() / scan, kAuth);
+  EXPECT_TRUE(posted.ok() && posted->status == 202) << (posted.ok() ? posted->body : posted.status().ToString());
+  return posted.ok() && posted->status == 202 ? posted->Header("location") : "";
+}
+
 }  // namespace pointdag

@@ -89,5 +89,8 @@ class RawSocket {
 nlohmann::json Json(const client::Response& r);
 // Polls a job until it ends; returns its last state.
 nlohmann::json WaitForJob(client::Connection& c, const std::string& location);
+// Uploads `scan` (a file of ../shared/data) with the write token; returns the job's Location, or ""
+// with a test failure when the daemon does not take it with 202.
+std::string SubmitScan(client::Connection& c, const std::string& scan, const std::string& query);
 
 }  // namespace pointdag

@@ -69,10 +69,8 @@ class FaultTest : public ::testing::Test {
   static nlohmann::json Ingest(const Daemon& daemon, const std::string& scan, const std::string& query) {
     auto c = daemon.Connect();
     if (!c) return {};
-    auto r = c->Upload("/v1/datasets?" + query, testing::DataDir() / scan, kAuth);
-    EXPECT_TRUE(r.ok() && r->status == 202) << (r.ok() ? r->body : r.status().ToString());
-    if (!r.ok() || r->status != 202) return {};
-    return WaitForJob(*c, r->Header("location"));
+    const std::string location = SubmitScan(*c, scan, query);
+    return location.empty() ? nlohmann::json() : WaitForJob(*c, location);
   }
 
   testing::ScratchDir scratch_;
@@ -138,9 +136,8 @@ TEST_F(FaultTest, AnEndTheStoreCannotRecordIsReportedAndWrittenLater) {
   ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   ASSERT_NE(c, nullptr);
-  auto posted = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
-  ASSERT_EQ(posted->status, 202);
-  const std::string location = posted->Header("location");
+  const std::string location = SubmitScan(*c, "lion_takanawa_pdrf7_rgb.las", "name=lion");
+  ASSERT_FALSE(location.empty());
   ASSERT_TRUE(Eventually([&] { return Json(*c->Request("GET", location))["stage"] == "tile"; }));
   testing::StoreLock lock(daemon.store());
   ASSERT_TRUE(lock.held());
@@ -178,8 +175,8 @@ TEST_F(FaultTest, ADiskFullFailsTheJobAndKeepsWhatWasStored) {
   ASSERT_NE(c, nullptr);
   const std::string tile_bytes = c->Request("GET", tile)->body;
 
-  auto posted = c->Upload("/v1/datasets?name=autzen", testing::DataDir() / "autzen_trim_pdrf3_rgb.las", kAuth);
-  ASSERT_EQ(posted->status, 202);
+  const std::string location = SubmitScan(*c, "autzen_trim_pdrf3_rgb.las", "name=autzen");
+  ASSERT_FALSE(location.empty());
   const auto filler = var() / "filler";
   {
     const int fd = ::open(filler.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -189,7 +186,7 @@ TEST_F(FaultTest, ADiskFullFailsTheJobAndKeepsWhatWasStored) {
     }
     ::close(fd);
   }
-  const nlohmann::json job = WaitForJob(*c, posted->Header("location"));
+  const nlohmann::json job = WaitForJob(*c, location);
   EXPECT_EQ(job["status"], "failed") << job.dump();
   EXPECT_NE(job.value("error", "").find("the dataset could not be stored: IoError: sqlite: database or disk is full"),
             std::string::npos) << job.dump();

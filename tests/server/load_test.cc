@@ -31,9 +31,10 @@ TEST(Load, TwoHundredClientsWithoutAnError) {
   Daemon daemon(scratch.path());
   ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
-  const auto posted = c->Upload("/v1/datasets?name=load&voxel=0.5", testing::DataDir() / "tiny_1.2-with-color_1065pts.las", kAuth);
-  ASSERT_EQ(posted->status, 202);
-  const nlohmann::json job = WaitForJob(*c, posted->Header("location"));
+  ASSERT_NE(c, nullptr);
+  const std::string location = SubmitScan(*c, "tiny_1.2-with-color_1065pts.las", "name=load&voxel=0.5");
+  ASSERT_FALSE(location.empty());
+  const nlohmann::json job = WaitForJob(*c, location);
   ASSERT_EQ(job["status"], "done") << job.dump();
   const std::string dataset = "/v1/datasets/" + job["dataset_id"].get<std::string>();
   std::vector<std::string> targets = {dataset, dataset + "/hierarchy/0/0/0/0"};

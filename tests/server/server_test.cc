@@ -263,9 +263,9 @@ TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
   Daemon daemon(scratch.path());
   ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
-  auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
-  ASSERT_EQ(r->status, 202);
-  const std::string location = r->Header("location");
+  ASSERT_NE(c, nullptr);
+  const std::string location = SubmitScan(*c, "lion_takanawa_pdrf7_rgb.las", "name=lion");
+  ASSERT_FALSE(location.empty());
   // Kill it while tiles are being encoded (the longest stage).
   for (int i = 0; i < 400; ++i) {
     const auto job = Json(*c->Request("GET", location));
@@ -347,9 +347,8 @@ TEST(ServerJobs, AJobInterruptedTwiceIsNotResumedAThirdTime) {
   ASSERT_TRUE(daemon.Start());
   auto c = daemon.Connect();
   ASSERT_NE(c, nullptr);
-  auto r = c->Upload("/v1/datasets?name=lion", testing::DataDir() / "lion_takanawa_pdrf7_rgb.las", kAuth);
-  ASSERT_EQ(r->status, 202);
-  const std::string location = r->Header("location");
+  const std::string location = SubmitScan(*c, "lion_takanawa_pdrf7_rgb.las", "name=lion");
+  ASSERT_FALSE(location.empty());
   for (int crash = 1; crash <= 2; ++crash) {
     WaitUntilRunning(*c, location);
     daemon.Stop(SIGKILL);

@@ -39,6 +39,17 @@ std::string Request(const std::string& method, const std::string& target, const 
   return method + " " + target + " HTTP/1.1\r\nHost: pointdagd\r\n" + headers + "\r\n";
 }
 
+// `n` connections from `source`, each answered once (/livez) and then held open.
+std::vector<RawSocket> HoldServedConnections(const Daemon& daemon, int n, const char* source = "127.0.0.1") {
+  std::vector<RawSocket> held;
+  for (int i = 0; i < n; ++i) {
+    held.emplace_back(daemon.port(), source);
+    held.back().Send(Request("GET", "/livez"));
+    EXPECT_EQ(held.back().ReadResponse().bytes.rfind("HTTP/1.1 200", 0), 0u) << "connection " << i;
+  }
+  return held;
+}
+
 size_t CountResponses(const std::string& bytes) {
   size_t n = 0;
   for (size_t at = 0; (at = bytes.find("HTTP/1.1 ", at)) != std::string::npos; ++at) ++n;
@@ -178,12 +189,8 @@ TEST(Transport, ConnectionCapRefusesCleanlyAndRecovers) {
   testing::ScratchDir scratch;
   auto daemon = StartDaemon(scratch, "max_connections = 8\n");
   ASSERT_TRUE(daemon->started());
-  std::vector<RawSocket> held;
-  for (int i = 0; i < 8; ++i) {
-    held.emplace_back(daemon->port());
-    held.back().Send(Request("GET", "/livez"));
-    ASSERT_EQ(held.back().ReadResponse().bytes.rfind("HTTP/1.1 200", 0), 0u);
-  }
+  std::vector<RawSocket> held = HoldServedConnections(*daemon, 8);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   RawSocket over(daemon->port());
   const auto read = over.ReadUntil(10, [](const std::string&) { return false; });
   EXPECT_EQ(read.bytes.rfind("HTTP/1.1 503", 0), 0u) << read.bytes;
@@ -199,12 +206,8 @@ TEST(Transport, PerClientCapKeepsRoomForOthers) {
   testing::ScratchDir scratch;
   auto daemon = StartDaemon(scratch, "max_connections_per_client = 4\n");
   ASSERT_TRUE(daemon->started());
-  std::vector<RawSocket> greedy;
-  for (int i = 0; i < 4; ++i) {
-    greedy.emplace_back(daemon->port(), "127.0.0.2");
-    greedy.back().Send(Request("GET", "/livez"));
-    ASSERT_EQ(greedy.back().ReadResponse().bytes.rfind("HTTP/1.1 200", 0), 0u);
-  }
+  std::vector<RawSocket> greedy = HoldServedConnections(*daemon, 4, "127.0.0.2");
+  ASSERT_FALSE(::testing::Test::HasFailure());
   RawSocket fifth(daemon->port(), "127.0.0.2");
   const auto read = fifth.ReadUntil(10, [](const std::string&) { return false; });
   EXPECT_EQ(read.bytes.rfind("HTTP/1.1 503", 0), 0u) << read.bytes;
