@@ -1,0 +1,68 @@
+// Through the pages in a real Chromium against a real pointdagd: upload a scan on the home page,
+// follow its job to a link, then see the dataset drawn from our .pdag tiles and from its 3D Tiles.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launchChromium, newPage } from './browser.mjs';
+import { Daemon } from './daemon.mjs';
+import { checkDrawn } from './drawn_check.mjs';
+import { scanPath } from './scans.mjs';
+
+const TOKEN = 'browser-test-write-token';
+const NAME = 'autzen-browser';
+let daemon;
+let browser;
+let page;
+let datasetPath = null;
+
+before(async () => {
+  daemon = await Daemon.start({ token: TOKEN });
+  browser = await launchChromium();
+  page = await newPage(browser);
+});
+
+after(async () => {
+  if (browser) await browser.close();
+  if (daemon) await daemon.stop();
+});
+
+test('a scan uploaded on the home page, with the token, becomes a linked dataset', async () => {
+  await page.goto(`${daemon.url}/`);
+  await page.locator('#token').fill(TOKEN);
+  await page.locator('#token').blur();
+  await page.locator('#file').setInputFiles(scanPath('autzen_trim_pdrf3_rgb.las'));
+  await page.locator('#name').fill(NAME);
+  await page.locator('#upload').click();
+  const link = page.locator('#dataset-link');
+  await link.waitFor({ state: 'visible', timeout: 120_000 });
+  assert.equal(await page.locator('#send-progress').evaluate((p) => p.value / p.max), 1);
+  assert.equal(await page.locator('#job-progress').evaluate((p) => p.value), 100);
+  assert.match(await page.locator('#job-status').textContent(), /^done/);
+  assert.equal(await page.locator('#upload-error').isHidden(), true);
+  assert.equal(await page.evaluate(() => localStorage.getItem('pointdag.token')), TOKEN);
+  datasetPath = new URL(await link.getAttribute('href'), daemon.url).pathname;
+  assert.match(datasetPath, /^\/datasets\/[0-9a-f]+$/);
+  // The list refreshed: the new dataset is linked with its sizes.
+  const row = page.locator('#datasets tr', { has: page.locator(`a[href="${datasetPath}"]`) });
+  await row.waitFor({ timeout: 10_000 });
+  const cells = await row.locator('td').allTextContents();
+  assert.equal(cells[0], NAME);
+  assert.equal(cells[1], '110,000');
+  assert.match(cells[5], /^\d+\.\d\d× smaller$/);
+  assert.deepEqual(page.errors, []);
+});
+
+test('the dataset page draws the scan from .pdag tiles where its bounds project', async (t) => {
+  assert.ok(datasetPath, 'the upload test made no dataset');
+  await page.goto(`${daemon.url}${datasetPath}`); // a shareable URL: loaded directly
+  const { state } = await checkDrawn(page, 'pdag', t);
+  assert.ok(state.bytesFetched > 0 && state.decoder.tiles > 0, JSON.stringify(state));
+  assert.equal(state.errors, 0);
+  assert.deepEqual(page.errors, []);
+});
+
+test('the 3D Tiles page draws the same scan with 3d-tiles-renderer', async (t) => {
+  assert.ok(datasetPath, 'the upload test made no dataset');
+  await page.goto(`${daemon.url}${datasetPath}/3dtiles`);
+  await checkDrawn(page, '3dtiles', t);
+  assert.deepEqual(page.errors, []);
+});

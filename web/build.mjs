@@ -1,0 +1,138 @@
+#!/usr/bin/env node
+// Builds the viewer that pointdagd serves (contract 3 of the web brief):
+//   node web/build.mjs OUTDIR [--wasm-dir DIR]
+// writes OUTDIR/index.html (served with no-cache for /, /datasets/{id}, /datasets/{id}/3dtiles)
+// and OUTDIR/assets/* with content-hashed names (served as immutable). Everything comes from
+// web/node_modules: the page never reaches a CDN or an external font.
+// The decode worker is its own entry; its hashed URL reaches the app through `define`. When
+// --wasm-dir holds the WASM decoder (pdag_decoder.js + pdag_decoder.wasm), both are copied into
+// assets under hashed names and their URLs reach the worker the same way.
+import { createHash } from 'node:crypto';
+import { copyFileSync, existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { basename, dirname, extname, join, relative, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import * as esbuild from 'esbuild';
+
+const webDir = dirname(fileURLToPath(import.meta.url));
+
+function parseArgs(argv) {
+  const args = { outDir: null, wasmDir: null };
+  for (let i = 0; i < argv.length; ++i) {
+    if (argv[i] === '--wasm-dir') args.wasmDir = argv[++i];
+    else if (argv[i].startsWith('--')) throw new Error(`unknown option ${argv[i]}`);
+    else if (args.outDir === null) args.outDir = argv[i];
+    else throw new Error(`unexpected argument ${argv[i]}`);
+  }
+  if (!args.outDir) throw new Error('usage: node web/build.mjs OUTDIR [--wasm-dir DIR]');
+  return args;
+}
+
+function contentHash(bytes) {
+  return createHash('sha256').update(bytes).digest('hex').slice(0, 12);
+}
+
+// Copies the WASM decoder into assets as NAME-HASH.EXT; returns {js, wasm} URLs or nulls.
+function copyWasm(wasmDir, assetsDir) {
+  const urls = { js: null, wasm: null };
+  if (!wasmDir) return urls;
+  const js = join(wasmDir, 'pdag_decoder.js');
+  const wasm = join(wasmDir, 'pdag_decoder.wasm');
+  if (!existsSync(js) || !existsSync(wasm)) {
+    console.warn(`build.mjs: no pdag_decoder.js/.wasm in ${wasmDir}; the WASM backend is left out`);
+    return urls;
+  }
+  for (const [key, file] of [['js', js], ['wasm', wasm]]) {
+    const bytes = readFileSync(file);
+    const name = `${basename(file, extname(file))}-${contentHash(bytes)}${extname(file)}`;
+    copyFileSync(file, join(assetsDir, name));
+    urls[key] = `/assets/${name}`;
+  }
+  return urls;
+}
+
+const common = {
+  bundle: true,
+  minify: true,
+  sourcemap: true,
+  target: ['chrome100', 'firefox100', 'safari15'],
+  legalComments: 'linked',
+  metafile: true,
+  logLevel: 'warning',
+};
+
+// The script esbuild wrote for `entry` (a path relative to web/), from its metafile.
+function outputOf(metafile, entry) {
+  const found = Object.entries(metafile.outputs).find(([out, info]) => info.entryPoint === entry && out.endsWith('.js'));
+  if (!found) throw new Error(`esbuild wrote no script for ${entry}`);
+  return found[0];
+}
+
+function assetUrl(outDir, file) {
+  return '/' + relative(outDir, resolve(webDir, file)).split('\\').join('/');
+}
+
+function indexHtml(scriptUrl, cssUrl) {
+  return `<!doctype html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>pointdag</title>
+<link rel="icon" href="data:,">
+<link rel="stylesheet" href="${cssUrl}">
+<script type="module" src="${scriptUrl}"></script>
+</head>
+<body>
+<noscript>pointdag's viewer needs JavaScript.</noscript>
+</body>
+</html>
+`;
+}
+
+async function main() {
+  const { outDir: outArg, wasmDir } = parseArgs(process.argv.slice(2));
+  const outDir = resolve(outArg);
+  const assetsDir = join(outDir, 'assets');
+  rmSync(assetsDir, { recursive: true, force: true });
+  mkdirSync(assetsDir, { recursive: true });
+
+  const wasm = copyWasm(wasmDir, assetsDir);
+  const worker = await esbuild.build({
+    ...common,
+    absWorkingDir: webDir,
+    entryPoints: ['src/decoder/decode_worker.js'],
+    outdir: assetsDir,
+    entryNames: '[name]-[hash]',
+    format: 'esm',
+    define: {
+      POINTDAG_WASM_JS_URL: JSON.stringify(wasm.js),
+      POINTDAG_WASM_URL: JSON.stringify(wasm.wasm),
+    },
+  });
+  const workerFile = outputOf(worker.metafile, 'src/decoder/decode_worker.js');
+
+  const app = await esbuild.build({
+    ...common,
+    absWorkingDir: webDir,
+    entryPoints: ['src/app/main.js'],
+    outdir: assetsDir,
+    entryNames: '[name]-[hash]',
+    chunkNames: 'chunk-[hash]',
+    assetNames: '[name]-[hash]',
+    format: 'esm',
+    splitting: true, // the home page loads without three.js
+    define: { POINTDAG_WORKER_URL: JSON.stringify(assetUrl(outDir, workerFile)) },
+  });
+  const appJs = outputOf(app.metafile, 'src/app/main.js');
+  const appCss = app.metafile.outputs[appJs].cssBundle;
+  if (!appCss) throw new Error('esbuild wrote no stylesheet for src/app/main.js');
+
+  writeFileSync(join(outDir, 'index.html'), indexHtml(assetUrl(outDir, appJs), assetUrl(outDir, appCss)));
+  console.log(`build.mjs: wrote ${join(outDir, 'index.html')} and ${assetsDir}` +
+              (wasm.js ? ' (with the WASM decoder)' : ''));
+}
+
+main().catch((err) => {
+  console.error(`build.mjs: ${err.message}`);
+  process.exit(1);
+});

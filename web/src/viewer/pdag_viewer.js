@@ -1,0 +1,134 @@
+// Streams a dataset's .pdag tiles (GET /v1/datasets/{id}/tiles/...) into a SceneView: hierarchy
+// pages on demand, tiles chosen per frame by LodSelector, fetched by TileLoader, decoded in a
+// DecoderPool of Web Workers, kept by TileCache within a budget of points.
+/* global POINTDAG_WORKER_URL */
+import { formatBytes, formatInt } from '../app/format.js';
+import { DecoderPool } from './decoder_pool.js';
+import { LodSelector } from './lod_selector.js';
+import { PointMaterials } from './point_materials.js';
+import { boxCorners } from './scene_view.js';
+import { TileCache } from './tile_cache.js';
+import { TileHierarchy } from './tile_hierarchy.js';
+import { TileLoader } from './tile_loader.js';
+
+const DEFAULTS = { budget: 10_000_000, sse: 1.5, inflight: 6 };
+
+function numberParam(params, name) {
+  const v = Number(params.get(name));
+  return params.has(name) && Number.isFinite(v) && v > 0 ? v : DEFAULTS[name];
+}
+
+export class PdagViewer {
+  // params: the page's query (?budget=POINTS, ?sse=PIXELS, ?inflight=N, ?decoder=js|wasm).
+  constructor(view, api, dataset, params) {
+    this.view = view;
+    this.dataset = dataset;
+    const { min, max } = dataset.bounds;
+    this.frameOrigin = min.map((v, i) => (v + max[i]) / 2); // the viewer's frame: centred on the bounds
+    const grid = {
+      min: min.map((v, i) => v - this.frameOrigin[i]),
+      voxelSize: dataset.voxel_size,
+      tileDepth: dataset.tile_depth,
+      finestLevel: dataset.levels - 1,
+    };
+    this.hierarchy = new TileHierarchy(api, dataset.id, grid);
+    this.hierarchy.onChange = () => view.requestRender();
+    this.selector = new LodSelector(this.hierarchy, grid.finestLevel, numberParam(params, 'sse'));
+    this.cache = new TileCache(view.scene, numberParam(params, 'budget'));
+    this.backend = params.get('decoder') || undefined;
+    const workers = Math.min(4, Math.max(1, (navigator.hardwareConcurrency || 2) - 1));
+    this.pool = new DecoderPool(POINTDAG_WORKER_URL, workers, this.backend);
+    this.loader = new TileLoader({
+      api, datasetId: dataset.id, pool: this.pool, cache: this.cache,
+      materials: new PointMaterials(view.camera), frameOrigin: this.frameOrigin,
+      maxInFlight: numberParam(params, 'inflight'),
+      onLoaded: (node) => this.tileLoaded(node),
+    });
+    this.frame = 0;
+    this.drawn = [];
+    this.complete = false;
+    this.firstFrameMs = null;
+    this.finestMs = null;
+    this.userMoved = false;
+    view.controls.addEventListener('start', () => { this.userMoved = true; });
+    view.onFrame = () => this.update();
+  }
+
+  async start() {
+    await this.hierarchy.loadRoot();
+    this.view.fit(this.dataBox());
+  }
+
+  // The dataset's box in the viewer's frame: the root tile's tight box once decoded (it holds
+  // every voxel of every level), the bounds' cube before.
+  dataBox() {
+    return this.hierarchy.root.box;
+  }
+
+  fit() {
+    this.view.fit(this.dataBox());
+  }
+
+  tileLoaded(node) {
+    if (node === this.hierarchy.root && !this.userMoved) this.fit();
+    this.cache.trim(this.frame);
+    this.view.requestRender();
+  }
+
+  update() {
+    if (!this.hierarchy.root) return; // start() has not read the root page yet
+    const frame = ++this.frame;
+    const sel = this.selector.select(this.view.camera, this.view.heightPx(), frame);
+    for (const node of this.drawn) if (node.points) node.points.visible = false;
+    for (const node of sel.draw) node.points.visible = true;
+    this.drawn = sel.draw;
+    this.loader.schedule(sel.wanted, (points) => this.cache.pointsUsedIn(frame) + points <= this.cache.budget);
+    this.cache.trim(frame);
+    const now = performance.now();
+    if (this.firstFrameMs === null && sel.draw.length) this.firstFrameMs = now;
+    // Finest visible level drawn: nothing more to fetch for this view (or nothing the budget allows).
+    // (A wanted tile the budget refused is neither in flight nor queued.)
+    this.complete = sel.covered && !sel.pagesWanted && this.loader.inFlight === 0 &&
+      this.loader.queued === 0 && sel.draw.length > 0;
+    if (this.complete && this.finestMs === null) this.finestMs = now;
+  }
+
+  state() {
+    const levels = [...new Set(this.drawn.map((n) => n.level))].sort((a, b) => a - b);
+    return {
+      finestVisibleLevelDrawn: this.complete,
+      levelsDrawn: levels,
+      tilesOnScreen: this.drawn.length,
+      pointsOnScreen: this.drawn.reduce((n, t) => n + t.voxels, 0),
+      loading: this.loader.inFlight + this.loader.queued + this.hierarchy.loading,
+      firstFrameMs: this.firstFrameMs,
+      finestMs: this.finestMs,
+      bytesFetched: this.loader.bytes,
+      tilesFetched: this.loader.loaded,
+      residentPoints: this.cache.points,
+      budgetPoints: this.cache.budget,
+      decoder: { backend: this.backend || 'default', tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
+      errors: this.loader.failures,
+      lastError: this.loader.lastError,
+    };
+  }
+
+  projectedBounds() {
+    return this.view.project(boxCorners(this.dataBox()));
+  }
+
+  statRows() {
+    const s = this.state();
+    return [
+      ['Tiles on screen', formatInt(s.tilesOnScreen)],
+      ['Points on screen', formatInt(s.pointsOnScreen)],
+      ['Levels drawn', s.levelsDrawn.join(', ') || '–'],
+      ['Frame', `${this.view.frameMs.toFixed(1)} ms`],
+      ['Loading', s.loading],
+      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles`],
+      ['Resident', `${formatInt(s.residentPoints)} / ${formatInt(s.budgetPoints)} points`],
+      ['Decode', s.decoder.tiles ? `${(s.decoder.ms / s.decoder.tiles).toFixed(1)} ms/tile (${s.decoder.backend})` : '–'],
+      ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
+    ];
+  }
+}

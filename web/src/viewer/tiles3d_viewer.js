@@ -1,0 +1,156 @@
+// The same dataset drawn from its 3D Tiles 1.1 tileset (GET /v1/datasets/{id}/3dtiles/tileset.json,
+// .glb point tiles with EXT_meshopt_compression + KHR_mesh_quantization) by 3d-tiles-renderer.
+// The tileset's root transform is ENU->ECEF: the tiles group sits under its inverse, shifted to the
+// centre of the dataset's bounds, so this view shares PdagViewer's frame and camera.
+import * as THREE from 'three';
+import { TilesRenderer } from '3d-tiles-renderer';
+import { GLTFExtensionsPlugin } from '3d-tiles-renderer/plugins';
+import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
+import { formatBytes, formatInt } from '../app/format.js';
+import { ByteCounterPlugin } from './byte_counter_plugin.js';
+import { boxCorners } from './scene_view.js';
+
+const LEVEL_OF_URL = /\/(\d+)\/\d+\/\d+\/\d+\.glb(\?|$)/;
+
+function numberParam(params, name, fallback) {
+  const v = Number(params.get(name));
+  return params.has(name) && Number.isFinite(v) && v > 0 ? v : fallback;
+}
+
+export class Tiles3dViewer {
+  // params: ?sse=PIXELS (as PdagViewer: refine while a voxel projects larger than this).
+  constructor(view, api, dataset, params) {
+    this.view = view;
+    this.dataset = dataset;
+    this.sse = numberParam(params, 'sse', 1.5);
+    const { min, max } = dataset.bounds;
+    this.centre = new THREE.Vector3(...min.map((v, i) => (v + max[i]) / 2));
+    this.tiles = new TilesRenderer(`/v1/datasets/${encodeURIComponent(dataset.id)}/3dtiles/tileset.json`);
+    this.tiles.fetchOptions = { headers: api.tokens.headers() };
+    this.bytes = new ByteCounterPlugin();
+    this.tiles.registerPlugin(this.bytes);
+    this.tiles.registerPlugin(new GLTFExtensionsPlugin({ meshoptDecoder: MeshoptDecoder }));
+    this.tiles.setCamera(view.camera);
+    this.tiles.setResolutionFromRenderer(view.camera, view.renderer);
+    this.frameGroup = new THREE.Group(); // the dataset frame, centred: inverse of the root transform
+    this.frameGroup.matrixAutoUpdate = false;
+    this.frameGroup.add(this.tiles.group);
+    view.scene.add(this.frameGroup);
+    this.tiles.addEventListener('needs-update', () => view.requestRender());
+    this.tiles.addEventListener('load-model', (e) => this.styleModel(e.scene, e.url));
+    this.tiles.addEventListener('load-error', (e) => { this.lastError = `${e.url}: ${e.error.message}`; });
+    this.complete = false;
+    this.firstFrameMs = null;
+    this.finestMs = null;
+    this.lastError = null;
+    view.onFrame = () => this.update();
+  }
+
+  start() {
+    return new Promise((resolve, reject) => {
+      this.tiles.addEventListener('load-root-tileset', ({ tileset }) => {
+        this.useTileset(tileset);
+        resolve();
+      });
+      this.tiles.addEventListener('load-error', (e) => { if (!e.tile) reject(new Error(`${e.url}: ${e.error.message}`)); });
+      this.view.requestRender(); // the first update() fetches tileset.json
+    });
+  }
+
+  useTileset(tileset) {
+    const transform = new THREE.Matrix4();
+    if (tileset.root.transform) transform.fromArray(tileset.root.transform);
+    this.frameGroup.matrix.copy(transform).invert().premultiply(new THREE.Matrix4().makeTranslation(this.centre.clone().negate()));
+    this.frameGroup.updateMatrixWorld(true);
+    // Our geometric errors are a multiple of the voxel size: scale the pixel target alike.
+    const voxel0 = this.dataset.voxel_size * 2 ** (this.dataset.levels - 1);
+    if (tileset.root.geometricError > 0) this.tiles.errorTarget = (this.sse * tileset.root.geometricError) / voxel0;
+    this.fit();
+  }
+
+  // glTF points are 1 px wide: make them as wide as their level's voxel, as in PdagViewer.
+  styleModel(scene, url) {
+    const match = String(url).match(LEVEL_OF_URL);
+    if (!match) return;
+    const level = Number(match[1]);
+    const voxel = this.dataset.voxel_size * 2 ** (this.dataset.levels - 1 - level);
+    const tanHalfFov = Math.tan(THREE.MathUtils.degToRad(this.view.camera.fov / 2));
+    scene.traverse((obj) => {
+      if (!obj.isPoints) return;
+      obj.material.size = voxel / tanHalfFov;
+      obj.material.sizeAttenuation = true;
+      obj.material.vertexColors = !!obj.geometry.attributes.color;
+      obj.material.needsUpdate = true;
+    });
+  }
+
+  // The root tile's bounding box, in the viewer's frame.
+  dataCorners() {
+    const box = new THREE.Box3();
+    const matrix = new THREE.Matrix4();
+    if (!this.tiles.getOrientedBoundingBox(box, matrix)) return null;
+    return boxCorners(box, matrix.premultiply(this.tiles.group.matrixWorld));
+  }
+
+  fit() {
+    const corners = this.dataCorners();
+    if (corners) this.view.fit(new THREE.Box3().setFromPoints(corners));
+  }
+
+  update() {
+    this.view.scene.updateMatrixWorld();
+    this.tiles.update();
+    const visible = this.tiles.visibleTiles.size;
+    const now = performance.now();
+    if (this.firstFrameMs === null && visible > 0) this.firstFrameMs = now;
+    // update() clears isLoading only when nothing is queued, downloading, parsing or being expanded.
+    this.complete = !!this.tiles.root && !this.tiles.isLoading && visible > 0;
+    if (this.complete && this.finestMs === null) this.finestMs = now;
+    if (this.tiles.isLoading) this.view.requestRender(); // keep traversing while tiles stream in
+  }
+
+  visibleTiles() {
+    return [...this.tiles.visibleTiles].filter((t) => t.engineData && t.engineData.scene);
+  }
+
+  state() {
+    const levels = new Set();
+    let points = 0;
+    for (const tile of this.visibleTiles()) {
+      const match = tile.content && String(tile.content.uri).match(LEVEL_OF_URL);
+      if (match) levels.add(Number(match[1]));
+      tile.engineData.scene.traverse((obj) => { if (obj.isPoints) points += obj.geometry.attributes.position.count; });
+    }
+    const s = this.tiles.stats;
+    return {
+      finestVisibleLevelDrawn: this.complete,
+      levelsDrawn: [...levels].sort((a, b) => a - b),
+      tilesOnScreen: this.visibleTiles().length,
+      pointsOnScreen: points,
+      loading: s.queued + s.downloading + s.parsing,
+      firstFrameMs: this.firstFrameMs,
+      finestMs: this.finestMs,
+      bytesFetched: this.bytes.bytes,
+      tilesFetched: this.bytes.files,
+      lastError: this.lastError,
+    };
+  }
+
+  projectedBounds() {
+    const corners = this.dataCorners();
+    return corners ? this.view.project(corners) : null;
+  }
+
+  statRows() {
+    const s = this.state();
+    return [
+      ['Tiles on screen', formatInt(s.tilesOnScreen)],
+      ['Points on screen', formatInt(s.pointsOnScreen)],
+      ['Levels drawn', s.levelsDrawn.join(', ') || '–'],
+      ['Frame', `${this.view.frameMs.toFixed(1)} ms`],
+      ['Loading', s.loading],
+      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} files`],
+      ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
+    ];
+  }
+}
