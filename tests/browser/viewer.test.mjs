@@ -6,6 +6,7 @@ import { launchChromium, newPage } from './browser.mjs';
 import { Daemon } from './daemon.mjs';
 import { checkDrawn } from './drawn_check.mjs';
 import { scanPath } from './scans.mjs';
+import { intersectionOverUnion } from './screenshot_check.mjs';
 
 const TOKEN = 'browser-test-write-token';
 const NAME = 'autzen-browser';
@@ -13,6 +14,7 @@ let daemon;
 let browser;
 let page;
 let datasetPath = null;
+let pdagDrawn = null; // what the .pdag page showed, for the 3D Tiles page to match
 
 before(async () => {
   daemon = await Daemon.start({ token: TOKEN });
@@ -54,7 +56,8 @@ test('a scan uploaded on the home page, with the token, becomes a linked dataset
 test('the dataset page draws the scan from .pdag tiles where its bounds project', async (t) => {
   assert.ok(datasetPath, 'the upload test made no dataset');
   await page.goto(`${daemon.url}${datasetPath}`); // a shareable URL: loaded directly
-  const { state } = await checkDrawn(page, 'pdag', t);
+  pdagDrawn = await checkDrawn(page, 'pdag', t);
+  const { state } = pdagDrawn;
   assert.ok(state.bytesFetched > 0 && state.decoder.tiles > 0, JSON.stringify(state));
   assert.equal(state.errors, 0);
   assert.deepEqual(page.errors, []);
@@ -63,6 +66,12 @@ test('the dataset page draws the scan from .pdag tiles where its bounds project'
 test('the 3D Tiles page draws the same scan with 3d-tiles-renderer', async (t) => {
   assert.ok(datasetPath, 'the upload test made no dataset');
   await page.goto(`${daemon.url}${datasetPath}/3dtiles`);
-  await checkDrawn(page, '3dtiles', t);
+  const drawn = await checkDrawn(page, '3dtiles', t);
+  // The same voxels in the same frame and view: the same levels, and the scan where the .pdag page drew it.
+  assert.ok(pdagDrawn, 'the .pdag page drew nothing to compare with');
+  assert.deepEqual(drawn.state.levelsDrawn, pdagDrawn.state.levelsDrawn);
+  assert.equal(drawn.state.pointsOnScreen, pdagDrawn.state.pointsOnScreen);
+  const iou = intersectionOverUnion(drawn.fg.box, pdagDrawn.fg.box);
+  assert.ok(iou >= 0.9, `the 3D Tiles page drew the scan at ${JSON.stringify(drawn.fg.box)}, the .pdag page at ${JSON.stringify(pdagDrawn.fg.box)}`);
   assert.deepEqual(page.errors, []);
 });

@@ -10,7 +10,7 @@ import { formatBytes, formatInt } from '../app/format.js';
 import { ByteCounterPlugin } from './byte_counter_plugin.js';
 import { boxCorners } from './scene_view.js';
 
-const LEVEL_OF_URL = /\/(\d+)\/\d+\/\d+\/\d+\.glb(\?|$)/;
+const LEVEL_OF_URL = /(?:^|\/)(\d+)\/\d+\/\d+\/\d+\.glb(?:\?|$)/; // tiles are L/X/Y/Z.glb
 
 function numberParam(params, name, fallback) {
   const v = Number(params.get(name));
