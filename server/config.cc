@@ -119,6 +119,9 @@ Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::s
   RETURN_IF_ERROR(r.Int("max_upload_bytes", config.max_upload_bytes, 1, std::numeric_limits<int64_t>::max()));
   RETURN_IF_ERROR(r.Int("tile_cache_mb", config.tile_cache_mb, 0, 1 << 20));
   RETURN_IF_ERROR(r.Strings("cors_origins", config.cors_origins));
+  std::string web_dir = config.web_dir.string();
+  RETURN_IF_ERROR(r.String("web_dir", web_dir));
+  config.web_dir = web_dir;  // "" turns the viewer off
   RETURN_IF_ERROR(r.String("log_level", config.log_level));
   static const std::set<std::string> levels = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (!levels.count(config.log_level)) return InvalidArgument(origin + ": log_level must be trace, debug, info, warn, error, critical or off");

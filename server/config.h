@@ -46,6 +46,7 @@ struct DaemonConfig {
   std::vector<std::string> cors_origins{"*"};
   std::string log_level = "info";
   std::filesystem::path port_file;        // where to write the bound port (for --listen HOST:0)
+  std::filesystem::path web_dir = POINTDAG_DEFAULT_WEB_DIR;  // the viewer (web/build.mjs output); empty: none
   HttpLimits http;
 };
 

@@ -48,6 +48,7 @@ Status ResolveTokens(DaemonConfig& config, const std::string& token_flag, const 
 int main(int argc, char** argv) {
   CLI::App app{"pointdagd: upload scans over HTTP, serve tiled LOD SVDAGs"};
   std::string config_file, listen, data_dir, token, token_file, port_file;
+  std::optional<std::string> web_dir;
   int workers = 0;
   bool check = false;
   bool no_token = false;
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-token", no_token, "allow listening beyond loopback without a token");
   app.add_option("--workers", workers, "concurrent ingest jobs")->check(CLI::Range(1, 64));
   app.add_option("--port-file", port_file, "write the bound port here once listening");
+  app.add_option("--web-dir", web_dir, "the web viewer's files (build/web); \"\" serves no viewer");
   app.add_flag("--check", check, "check the store in --data-dir and exit: 0 consistent, 1 with a report");
   CLI11_PARSE(app, argc, argv);
 
@@ -72,6 +74,7 @@ int main(int argc, char** argv) {
   if (!data_dir.empty()) config.data_dir = data_dir;
   if (workers > 0) config.workers = workers;
   if (!port_file.empty()) config.port_file = port_file;
+  if (web_dir) config.web_dir = *web_dir;
   if (check) {
     const auto report = CheckDataDir(config.data_dir);
     if (!report.ok()) return Fail(1, report.status());
@@ -118,6 +121,12 @@ int main(int argc, char** argv) {
   service_config.upload_dir = config.data_dir / "uploads";
   service_config.cors_origins = config.cors_origins;
   service_config.tile_cache_bytes = config.tile_cache_mb << 20;
+  auto web = WebFiles::Load(config.web_dir);
+  if (!web.ok()) {
+    spdlog::warn("no web viewer: {} (build it with scripts/build, or set web_dir / --web-dir)", web.status().message());
+    web = WebFiles();
+  }
+  service_config.web = std::make_shared<const WebFiles>(std::move(*web));
   Service service(**store, jobs, metrics, service_config);
   HttpServer server(service, metrics, config.http_threads, config.http);
   auto port = server.Listen(config.host, config.port);
@@ -135,6 +144,10 @@ int main(int argc, char** argv) {
                                                         : "token required for writes";
   spdlog::info("pointdagd listening on http://{}:{} (data in {}, {} worker(s), {}{})", config.host, *port,
                config.data_dir.string(), config.workers, access, config.read_token.empty() ? "" : ", read token set");
+  if (service_config.web->enabled()) {
+    spdlog::info("web viewer: http://{}:{}/ ({} files from {})", config.host, *port, service_config.web->file_count(),
+                 config.web_dir.string());
+  }
   server.Run();
   if (jobs.running() > 0) {
     // An ingest cannot be interrupted midway; its job resumes from the upload on the next start,

@@ -42,20 +42,6 @@ std::optional<TileKey> ParseTileKey(const std::vector<std::string>& parts, size_
   return TileKey{*level, *x, *y, *z};
 }
 
-bool EtagMatches(const std::string& if_none_match, const std::string& etag) {
-  // "*" matches any tag only as the whole field value (RFC 9110 13.1.2), never inside a tag.
-  const size_t first = if_none_match.find_first_not_of(" \t"), last = if_none_match.find_last_not_of(" \t");
-  if (first != std::string::npos && if_none_match.substr(first, last - first + 1) == "*") return true;
-  // A list of entity tags; the weak comparison applies to If-None-Match.
-  size_t pos = 0;
-  while ((pos = if_none_match.find('"', pos)) != std::string::npos) {
-    const size_t end = if_none_match.find('"', pos + 1);
-    if (end == std::string::npos) break;
-    if (if_none_match.compare(pos, end - pos + 1, etag) == 0) return true;
-    pos = end + 1;
-  }
-  return false;
-}
 
 // A single byte range of a body of `size` bytes: {first, last}, nullopt to ignore the header
 // (absent, malformed, several ranges), or {1, 0} when unsatisfiable.
@@ -109,6 +95,21 @@ std::string QueryOf(const std::string& target) {
 }
 
 }  // namespace
+
+bool EtagMatches(const std::string& if_none_match, const std::string& etag) {
+  // "*" matches any tag only as the whole field value (RFC 9110 13.1.2), never inside a tag.
+  const size_t first = if_none_match.find_first_not_of(" \t"), last = if_none_match.find_last_not_of(" \t");
+  if (first != std::string::npos && if_none_match.substr(first, last - first + 1) == "*") return true;
+  // A list of entity tags; the weak comparison applies to If-None-Match.
+  size_t pos = 0;
+  while ((pos = if_none_match.find('"', pos)) != std::string::npos) {
+    const size_t end = if_none_match.find('"', pos + 1);
+    if (end == std::string::npos) break;
+    if (if_none_match.compare(pos, end - pos + 1, etag) == 0) return true;
+    pos = end + 1;
+  }
+  return false;
+}
 
 std::map<std::string, std::string> ParseQuery(const std::string& query) {
   std::map<std::string, std::string> out;
@@ -398,6 +399,15 @@ HttpResponse Service::Route(const HttpRequest& request) {
       const auto key = ParseTileKey(parts, 4);
       if (!key) return Fail(400, "a tile is addressed as " + parts[3] + "/{level}/{x}/{y}/{z} with level 0..21", route);
       return parts[3] == "tiles" ? GetTile(request, id, *key) : GetHierarchy(request, id, *key);
+    }
+  }
+  if (get) {
+    if (config_.web) {
+      if (auto page = config_.web->Serve(request, path)) return *page;
+    }
+    if (path == "/") {
+      return Fail(404, "the web viewer is not installed in this daemon: build it (scripts/build runs web/build.mjs) and "
+                       "point web_dir (--web-dir) at the output, build/web", "/");
     }
   }
   return Fail(404, "no such resource: " + path, "other");

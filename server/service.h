@@ -16,6 +16,7 @@
 #include "metrics.h"
 #include "store.h"
 #include "tile_cache.h"
+#include "web_files.h"
 
 namespace pointdag::server {
 
@@ -43,6 +44,7 @@ struct ServiceConfig {
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   std::filesystem::path upload_dir;
   size_t tile_cache_bytes = size_t{256} << 20;
+  std::shared_ptr<const WebFiles> web;  // the viewer's static files; null or empty: no viewer
 };
 
 class Service {
@@ -90,6 +92,9 @@ class Service {
   TileCache cache_;
   bool ready_ = false;
 };
+
+// Whether an If-None-Match value names `etag` (a list of tags, or exactly "*").
+bool EtagMatches(const std::string& if_none_match, const std::string& etag);
 
 // "a=1&b=x%20y" -> {a: 1, b: "x y"}.
 std::map<std::string, std::string> ParseQuery(const std::string& query);

@@ -3,6 +3,8 @@
 // the tile cache against DELETE. Configurations the daemon's flags do not reach yet are tested here.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "jobs.h"
 #include "metrics.h"
 #include "service.h"
@@ -139,6 +141,30 @@ TEST_F(ServiceTest, OnlyAWholeValueStarMatchesIfNoneMatch) {
   EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", "\"x\", *"}})).status, 200);
   EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", " * "}})).status, 304);
   EXPECT_EQ(service.Handle(Get(kTile, {{"if-none-match", "\"x\", " + etag}})).status, 304);
+}
+
+TEST_F(ServiceTest, WithoutAViewerTheRootSaysHowToGetOne) {
+  Service service = Make(ServiceConfig{});
+  const HttpResponse r = service.Handle(Get("/"));
+  EXPECT_EQ(r.status, 404);
+  EXPECT_NE(r.body.find("the web viewer is not installed in this daemon"), std::string::npos) << r.body;
+  EXPECT_EQ(service.Handle(Get("/datasets/d000000000000001")).status, 404);
+}
+
+TEST_F(ServiceTest, TheViewerDoesNotShadowTheApi) {
+  std::filesystem::create_directories(scratch_ / "web/assets");
+  std::ofstream(scratch_ / "web/index.html") << "<!doctype html>";
+  auto web = WebFiles::Load(scratch_ / "web");
+  ASSERT_TRUE(web.ok()) << web.status().ToString();
+  ServiceConfig config;
+  config.web = std::make_shared<const WebFiles>(std::move(*web));
+  Service service = Make(config);
+  EXPECT_EQ(service.Handle(Get("/")).body, "<!doctype html>");
+  EXPECT_EQ(service.Handle(Get("/datasets/d000000000000001")).body, "<!doctype html>");
+  const HttpResponse api = service.Handle(Get("/v1/datasets/d000000000000001"));
+  EXPECT_EQ(api.status, 200);
+  EXPECT_NE(api.body.find("\"tile_count\""), std::string::npos);
+  EXPECT_EQ(service.Handle(HttpRequest{"POST", "/", {}, ""}).status, 404);
 }
 
 TEST(TileCache, ATileReadBeforeAnEraseIsNotCachedAfterIt) {
