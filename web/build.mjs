@@ -4,12 +4,13 @@
 // writes OUTDIR/index.html (served with no-cache for /, /datasets/{id}, /datasets/{id}/3dtiles)
 // and OUTDIR/assets/* with content-hashed names (served as immutable). Everything comes from
 // web/node_modules: the page never reaches a CDN or an external font.
-// The decode worker is its own entry; its hashed URL reaches the app through `define`. When
-// --wasm-dir holds the WASM decoder (pdag_decoder.js + pdag_decoder.wasm), both are copied into
-// assets under hashed names and their URLs reach the worker the same way.
+// The decode worker is its own entry; its hashed URL reaches the app through `define`
+// (POINTDAG_WORKER_URL). When --wasm-dir holds the WASM decoder (pdag_decoder.mjs), it is copied
+// into assets under a hashed name and its URL reaches the worker the same way (POINTDAG_WASM_URL,
+// null without it).
 import { createHash } from 'node:crypto';
 import { copyFileSync, existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
-import { basename, dirname, extname, join, relative, resolve } from 'node:path';
+import { dirname, join, relative, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import * as esbuild from 'esbuild';
 
@@ -31,23 +32,19 @@ function contentHash(bytes) {
   return createHash('sha256').update(bytes).digest('hex').slice(0, 12);
 }
 
-// Copies the WASM decoder into assets as NAME-HASH.EXT; returns {js, wasm} URLs or nulls.
+// Copies the WASM decoder (web/wasm's output: pdag_decoder.mjs, an ES module with the .wasm
+// embedded) into assets as pdag_decoder-HASH.mjs; returns its URL, or null when there is none.
 function copyWasm(wasmDir, assetsDir) {
-  const urls = { js: null, wasm: null };
-  if (!wasmDir) return urls;
-  const js = join(wasmDir, 'pdag_decoder.js');
-  const wasm = join(wasmDir, 'pdag_decoder.wasm');
-  if (!existsSync(js) || !existsSync(wasm)) {
-    console.warn(`build.mjs: no pdag_decoder.js/.wasm in ${wasmDir}; the WASM backend is left out`);
-    return urls;
+  if (!wasmDir) return null;
+  const file = join(wasmDir, 'pdag_decoder.mjs');
+  if (!existsSync(file)) {
+    console.warn(`build.mjs: no ${file}; the viewer decodes tiles in JavaScript only`);
+    return null;
   }
-  for (const [key, file] of [['js', js], ['wasm', wasm]]) {
-    const bytes = readFileSync(file);
-    const name = `${basename(file, extname(file))}-${contentHash(bytes)}${extname(file)}`;
-    copyFileSync(file, join(assetsDir, name));
-    urls[key] = `/assets/${name}`;
-  }
-  return urls;
+  const bytes = readFileSync(file);
+  const name = `pdag_decoder-${contentHash(bytes)}.mjs`;
+  copyFileSync(file, join(assetsDir, name));
+  return `/assets/${name}`;
 }
 
 const common = {
@@ -104,10 +101,7 @@ async function main() {
     outdir: assetsDir,
     entryNames: '[name]-[hash]',
     format: 'esm',
-    define: {
-      POINTDAG_WASM_JS_URL: JSON.stringify(wasm.js),
-      POINTDAG_WASM_URL: JSON.stringify(wasm.wasm),
-    },
+    define: { POINTDAG_WASM_URL: JSON.stringify(wasm) },
   });
   const workerFile = outputOf(worker.metafile, 'src/decoder/decode_worker.js');
 
@@ -129,7 +123,7 @@ async function main() {
 
   writeFileSync(join(outDir, 'index.html'), indexHtml(assetUrl(outDir, appJs), assetUrl(outDir, appCss)));
   console.log(`build.mjs: wrote ${join(outDir, 'index.html')} and ${assetsDir}` +
-              (wasm.js ? ' (with the WASM decoder)' : ''));
+              (wasm ? ' (with the WASM decoder)' : ''));
 }
 
 main().catch((err) => {

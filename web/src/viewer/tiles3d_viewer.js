@@ -27,8 +27,8 @@ export class Tiles3dViewer {
     this.centre = new THREE.Vector3(...min.map((v, i) => (v + max[i]) / 2));
     this.tiles = new TilesRenderer(`/v1/datasets/${encodeURIComponent(dataset.id)}/3dtiles/tileset.json`);
     this.tiles.fetchOptions = { headers: api.tokens.headers() };
-    this.bytes = new ByteCounterPlugin();
-    this.tiles.registerPlugin(this.bytes);
+    this.byteCounter = new ByteCounterPlugin();
+    this.tiles.registerPlugin(this.byteCounter);
     this.tiles.registerPlugin(new GLTFExtensionsPlugin({ meshoptDecoder: MeshoptDecoder }));
     this.tiles.setCamera(view.camera);
     this.tiles.setResolutionFromRenderer(view.camera, view.renderer);
@@ -130,8 +130,9 @@ export class Tiles3dViewer {
       loading: s.queued + s.downloading + s.parsing,
       firstFrameMs: this.firstFrameMs,
       finestMs: this.finestMs,
-      bytesFetched: this.bytes.bytes,
-      tilesFetched: this.bytes.files,
+      bytesFetched: this.byteCounter.tileBytes,
+      tilesFetched: this.byteCounter.tiles,
+      tilesetBytes: this.byteCounter.otherBytes,
       lastError: this.lastError,
     };
   }
@@ -149,7 +150,7 @@ export class Tiles3dViewer {
       ['Levels drawn', s.levelsDrawn.join(', ') || '–'],
       ['Frame', `${this.view.frameMs.toFixed(1)} ms`],
       ['Loading', s.loading],
-      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} files`],
+      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles (+ ${formatBytes(s.tilesetBytes)} tileset.json)`],
       ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
     ];
   }
