@@ -47,9 +47,13 @@ test('a scan uploaded on the home page, with the token, becomes a linked dataset
   const row = page.locator('#datasets tr', { has: page.locator(`a[href="${datasetPath}"]`) });
   await row.waitFor({ timeout: 10_000 });
   const cells = await row.locator('td').allTextContents();
+  const dataset = await (await fetch(`${daemon.url}/v1${datasetPath}`)).json();
   assert.equal(cells[0], NAME);
   assert.equal(cells[1], '110,000');
-  assert.match(cells[5], /^\d+\.\d\d× smaller$/);
+  assert.equal(cells[2], dataset.voxels.toLocaleString('en-US'));
+  assert.equal(cells[4], dataset.bits_per_point.toFixed(2));
+  assert.ok(dataset.draco.draco_over_ours > 1); // Autzen: Draco's bits over ours
+  assert.equal(cells[5], `${dataset.draco.draco_over_ours.toFixed(2)}× smaller`);
   assert.deepEqual(page.errors, []);
 });
 

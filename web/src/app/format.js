@@ -18,10 +18,11 @@ export function formatFixed(n, digits) {
   return Number.isFinite(n) ? n.toFixed(digits) : '–';
 }
 
-// Draco's size over ours on the same voxels (PROTOCOL.md §2 draco.draco_over_ours).
+// Our size against Draco's on the same voxels (PROTOCOL.md §2 draco.draco_over_ours = Draco's bits over ours).
 export function formatDracoRatio(dataset) {
   const r = dataset.draco && dataset.draco.draco_over_ours;
-  return Number.isFinite(r) ? `${r.toFixed(2)}× smaller` : '–';
+  if (!Number.isFinite(r) || r <= 0) return '–';
+  return r >= 1 ? `${r.toFixed(2)}× smaller` : `${(1 / r).toFixed(2)}× larger`;
 }
 
 export function formatLength(metres, georeferenced) {
