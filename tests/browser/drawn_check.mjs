@@ -13,17 +13,20 @@ const MARGIN_PX = 6; // points are squares centred on their voxel: they may stic
 // t: the node:test context, for a diagnostic line with the measures.
 export async function checkDrawn(page, name, t) {
   // Done when drawn, or when the page shows why it cannot draw.
-  await page.waitForFunction(() => (window.pointdagViewer && window.pointdagViewer.state().finestVisibleLevelDrawn) ||
-    !document.querySelector('#viewer-error').hidden, null, { timeout: 60_000, polling: 100 });
+  await page.waitForFunction(() => {
+    const viewer = window.pointdagViewer;
+    const error = document.querySelector('#viewer-error');
+    return (viewer && (viewer.state().finestVisibleLevelDrawn || viewer.state().lastError)) || (error && !error.hidden);
+  }, null, { timeout: 60_000, polling: 100 });
   const error = page.locator('#viewer-error');
   assert.ok(await error.isHidden(), `${name}: the page says: ${await error.textContent()}`);
   const { state, bounds } = await page.evaluate(() => ({
     state: window.pointdagViewer.state(), bounds: window.pointdagViewer.projectedBounds(),
   }));
+  assert.equal(state.lastError, null, `${name}: ${state.lastError}`);
   assert.ok(state.tilesOnScreen > 0 && state.pointsOnScreen > 0, `${name}: nothing on screen ${JSON.stringify(state)}`);
   assert.ok(state.levelsDrawn.length > 0, `${name}: no level drawn`);
   assert.equal(state.loading, 0, `${name}: still loading`);
-  assert.equal(state.lastError, null, `${name}: ${state.lastError}`);
   assert.ok(state.firstFrameMs > 0 && state.finestMs >= state.firstFrameMs, `${name}: timings ${JSON.stringify(state)}`);
 
   await page.addStyleTag({ content: 'header.top, .hud { visibility: hidden !important; }' });

@@ -56,8 +56,11 @@ async function measure(browser, opts, path) {
     const page = await context.newPage();
     if (opts.token) await page.addInitScript((t) => localStorage.setItem('pointdag.token', t), opts.token);
     await page.goto(`${opts.url}${path}`);
-    await page.waitForFunction(() => (window.pointdagViewer && window.pointdagViewer.state().finestVisibleLevelDrawn) ||
-      !document.querySelector('#viewer-error').hidden, null, { timeout: 300_000, polling: 50 });
+    await page.waitForFunction(() => {
+      const viewer = window.pointdagViewer;
+      const error = document.querySelector('#viewer-error');
+      return (viewer && (viewer.state().finestVisibleLevelDrawn || viewer.state().lastError)) || (error && !error.hidden);
+    }, null, { timeout: 300_000, polling: 50 });
     const error = await page.locator('#viewer-error').textContent();
     if (error) throw new Error(error);
     const state = await page.evaluate(() => window.pointdagViewer.state());

@@ -49,13 +49,13 @@ export class DatasetPage {
 
   async start() {
     try {
-      const dataset = await this.api.dataset(this.id);
+      // The metadata and the viewer's code load side by side.
+      const [dataset, { SceneView }, Viewer] = await Promise.all([
+        this.api.dataset(this.id), import('../viewer/scene_view.js'), this.viewerClass()]);
       this.title.textContent = dataset.name;
       document.title = `${dataset.name} · pointdag`;
       this.hud.setMeta(metaRows(dataset));
-      const { SceneView } = await import('../viewer/scene_view.js');
-      const view = new SceneView(this.viewport);
-      const viewer = await this.createViewer(view, dataset);
+      const viewer = new Viewer(new SceneView(this.viewport), this.api, dataset, this.params);
       window.pointdagViewer = { state: () => viewer.state(), projectedBounds: () => viewer.projectedBounds() };
       this.fitButton.addEventListener('click', () => viewer.fit());
       this.fitButton.disabled = false;
@@ -69,12 +69,8 @@ export class DatasetPage {
     return this;
   }
 
-  async createViewer(view, dataset) {
-    if (this.kind === '3dtiles') {
-      const { Tiles3dViewer } = await import('../viewer/tiles3d_viewer.js');
-      return new Tiles3dViewer(view, this.api, dataset, this.params);
-    }
-    const { PdagViewer } = await import('../viewer/pdag_viewer.js');
-    return new PdagViewer(view, this.api, dataset, this.params);
+  async viewerClass() {
+    if (this.kind === '3dtiles') return (await import('../viewer/tiles3d_viewer.js')).Tiles3dViewer;
+    return (await import('../viewer/pdag_viewer.js')).PdagViewer;
   }
 }

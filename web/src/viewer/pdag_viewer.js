@@ -11,7 +11,11 @@ import { TileCache } from './tile_cache.js';
 import { TileHierarchy } from './tile_hierarchy.js';
 import { TileLoader } from './tile_loader.js';
 
-const DEFAULTS = { budget: 10_000_000, sse: 1.5, inflight: 6 };
+// Decode workers: one per core beside the page's own, at least 2 (decoding and fetching overlap), at most 4.
+const DEFAULTS = {
+  budget: 10_000_000, sse: 1.5, inflight: 6,
+  workers: Math.min(4, Math.max(2, (navigator.hardwareConcurrency || 2) - 1)),
+};
 
 function numberParam(params, name) {
   const v = Number(params.get(name));
@@ -19,7 +23,7 @@ function numberParam(params, name) {
 }
 
 export class PdagViewer {
-  // params: the page's query (?budget=POINTS, ?sse=PIXELS, ?inflight=N, ?decoder=js|wasm).
+  // params: the page's query (?budget=POINTS, ?sse=PIXELS, ?inflight=N, ?workers=N, ?decoder=js|wasm).
   constructor(view, api, dataset, params) {
     this.view = view;
     this.dataset = dataset;
@@ -36,8 +40,7 @@ export class PdagViewer {
     this.selector = new LodSelector(this.hierarchy, grid.finestLevel, numberParam(params, 'sse'));
     this.cache = new TileCache(view.scene, numberParam(params, 'budget'));
     this.backend = params.get('decoder') || undefined;
-    const workers = Math.min(4, Math.max(1, (navigator.hardwareConcurrency || 2) - 1));
-    this.pool = new DecoderPool(POINTDAG_WORKER_URL, workers, this.backend);
+    this.pool = new DecoderPool(POINTDAG_WORKER_URL, numberParam(params, 'workers'), this.backend);
     this.loader = new TileLoader({
       api, datasetId: dataset.id, pool: this.pool, cache: this.cache,
       materials: new PointMaterials(view.camera), frameOrigin: this.frameOrigin,
