@@ -71,6 +71,7 @@ for (const c of cases) {
     assert.ok(expected.error.length > 0);
     assert.equal(await uploadThroughPage(file, c.token), `Refused (${c.status}): ${expected.error}`);
     if (c.status === 401) assert.equal(await page.locator('form.token').getAttribute('class'), 'card token attention');
+    assert.equal(await page.locator('#job-status').textContent(), 'not started');
     assert.equal(await page.locator('#dataset-link').count(), 0);
   });
 }

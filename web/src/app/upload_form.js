@@ -54,14 +54,16 @@ export class UploadForm {
     this.button.disabled = true;
     this.progress.hidden = false;
     this.setBar(this.jobBar, this.jobText, 0, 'waiting for the upload');
+    let job = null;
     try {
-      const job = await this.api.upload(file, this.params(file), (sent, total) => {
+      job = await this.api.upload(file, this.params(file), (sent, total) => {
         this.setBar(this.sendBar, this.sendText, total ? sent / total : 0,
           `${formatBytes(sent)} of ${formatBytes(total)}`);
       });
       this.setBar(this.sendBar, this.sendText, 1, `${formatBytes(file.size)} sent`);
       await this.follow(job);
     } catch (err) {
+      if (!job) this.setBar(this.jobBar, this.jobText, 0, 'not started');
       if (err.status === 401) this.onUnauthorized();
       this.showError(err.status ? `Refused (${err.status}): ${err.message}` : err.message);
     } finally {
