@@ -100,13 +100,15 @@ export class Tiles3dViewer {
   update() {
     this.view.scene.updateMatrixWorld();
     this.tiles.update();
-    const visible = this.tiles.visibleTiles.size;
+    const visible = this.visibleTiles().length;
     const now = performance.now();
     if (this.firstFrameMs === null && visible > 0) this.firstFrameMs = now;
-    // update() clears isLoading only when nothing is queued, downloading, parsing or being expanded.
-    this.complete = !!this.tiles.root && !this.tiles.isLoading && visible > 0;
+    // Nothing requested, downloading, parsing, or waiting to have its children expanded.
+    const t = this.tiles;
+    const busy = t.isLoading || t.downloadQueue.running || t.parseQueue.running || t.processNodeQueue.running;
+    this.complete = !!t.root && !busy && visible > 0;
     if (this.complete && this.finestMs === null) this.finestMs = now;
-    if (this.tiles.isLoading) this.view.requestRender(); // keep traversing while tiles stream in
+    if (busy) this.view.requestRender(); // keep traversing while tiles stream in
   }
 
   visibleTiles() {
