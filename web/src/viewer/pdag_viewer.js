@@ -6,6 +6,7 @@ import { formatBytes, formatInt } from '../app/format.js';
 import { DecoderPool } from './decoder_pool.js';
 import { LodSelector } from './lod_selector.js';
 import { PointMaterials } from './point_materials.js';
+import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
 import { TileCache } from './tile_cache.js';
 import { TileHierarchy } from './tile_hierarchy.js';
@@ -18,8 +19,7 @@ const DEFAULTS = {
 };
 
 function numberParam(params, name) {
-  const v = Number(params.get(name));
-  return params.has(name) && Number.isFinite(v) && v > 0 ? v : DEFAULTS[name];
+  return positiveParam(params, name, DEFAULTS[name]);
 }
 
 export class PdagViewer {

@@ -5,6 +5,11 @@ import * as THREE from 'three';
 
 const NO_COLOR = 0xc8ccd4; // scans without color
 
+// The `size` of a size-attenuated PointsMaterial whose points are `voxelSize` wide in world units.
+export function worldPointSize(voxelSize, camera) {
+  return voxelSize / Math.tan(THREE.MathUtils.degToRad(camera.fov / 2));
+}
+
 export class PointMaterials {
   constructor(camera) {
     this.camera = camera;
@@ -15,9 +20,8 @@ export class PointMaterials {
     const key = `${voxelSize}/${hasColor}`;
     let material = this.materials.get(key);
     if (!material) {
-      const tanHalfFov = Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2));
       material = new THREE.PointsMaterial({
-        size: voxelSize / tanHalfFov,
+        size: worldPointSize(voxelSize, this.camera),
         sizeAttenuation: true,
         vertexColors: hasColor,
         color: hasColor ? 0xffffff : NO_COLOR,

@@ -8,21 +8,18 @@ import { GLTFExtensionsPlugin } from '3d-tiles-renderer/plugins';
 import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
 import { formatBytes, formatInt } from '../app/format.js';
 import { ByteCounterPlugin } from './byte_counter_plugin.js';
+import { worldPointSize } from './point_materials.js';
+import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
 
 const LEVEL_OF_URL = /(?:^|\/)(\d+)\/\d+\/\d+\/\d+\.glb(?:\?|$)/; // tiles are L/X/Y/Z.glb
-
-function numberParam(params, name, fallback) {
-  const v = Number(params.get(name));
-  return params.has(name) && Number.isFinite(v) && v > 0 ? v : fallback;
-}
 
 export class Tiles3dViewer {
   // params: ?sse=PIXELS (as PdagViewer: refine while a voxel projects larger than this).
   constructor(view, api, dataset, params) {
     this.view = view;
     this.dataset = dataset;
-    this.sse = numberParam(params, 'sse', 1.5);
+    this.sse = positiveParam(params, 'sse', 1.5);
     const { min, max } = dataset.bounds;
     this.centre = new THREE.Vector3(...min.map((v, i) => (v + max[i]) / 2));
     this.tiles = new TilesRenderer(`/v1/datasets/${encodeURIComponent(dataset.id)}/3dtiles/tileset.json`);
@@ -74,10 +71,9 @@ export class Tiles3dViewer {
     if (!match) return;
     const level = Number(match[1]);
     const voxel = this.dataset.voxel_size * 2 ** (this.dataset.levels - 1 - level);
-    const tanHalfFov = Math.tan(THREE.MathUtils.degToRad(this.view.camera.fov / 2));
     scene.traverse((obj) => {
       if (!obj.isPoints) return;
-      obj.material.size = voxel / tanHalfFov;
+      obj.material.size = worldPointSize(voxel, this.view.camera);
       obj.material.sizeAttenuation = true;
       obj.material.vertexColors = !!obj.geometry.attributes.color;
       obj.material.needsUpdate = true;
