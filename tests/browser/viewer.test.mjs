@@ -59,10 +59,13 @@ test('a scan uploaded on the home page, with the token, becomes a linked dataset
 
 test('the dataset page draws the scan from .pdag tiles where its bounds project', async (t) => {
   assert.ok(datasetPath, 'the upload test made no dataset');
-  await page.goto(`${daemon.url}${datasetPath}`); // a shareable URL: loaded directly
+  // A shareable URL, loaded directly; hierarchy pages of one level, so that the viewer walks pages.
+  await page.goto(`${daemon.url}${datasetPath}?pagedepth=1`);
   pdagDrawn = await checkDrawn(page, 'pdag', t);
   const { state } = pdagDrawn;
   assert.ok(state.bytesFetched > 0 && state.decoder.tiles > 0, JSON.stringify(state));
+  // The root's page, then one for each of Autzen's two level-1 tiles, whose children the view needs.
+  assert.equal(state.hierarchyPages, 3);
   assert.equal(state.errors, 0);
   assert.deepEqual(page.errors, []);
 });

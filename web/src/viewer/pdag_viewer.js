@@ -23,7 +23,8 @@ function numberParam(params, name) {
 }
 
 export class PdagViewer {
-  // params: the page's query (?budget=POINTS, ?sse=PIXELS, ?inflight=N, ?workers=N, ?decoder=js|wasm).
+  // params: the page's query (?budget=POINTS, ?sse=PIXELS, ?inflight=N, ?workers=N, ?decoder=js|wasm,
+  // ?pagedepth=LEVELS of each hierarchy page).
   constructor(view, api, dataset, params) {
     this.view = view;
     this.dataset = dataset;
@@ -35,7 +36,7 @@ export class PdagViewer {
       tileDepth: dataset.tile_depth,
       finestLevel: dataset.levels - 1,
     };
-    this.hierarchy = new TileHierarchy(api, dataset.id, grid);
+    this.hierarchy = new TileHierarchy(api, dataset.id, grid, positiveParam(params, 'pagedepth', null));
     this.hierarchy.onChange = () => view.requestRender();
     this.selector = new LodSelector(this.hierarchy, grid.finestLevel, numberParam(params, 'sse'));
     this.cache = new TileCache(view.scene, numberParam(params, 'budget'));
@@ -108,6 +109,7 @@ export class PdagViewer {
       finestMs: this.finestMs,
       bytesFetched: this.loader.bytes,
       tilesFetched: this.loader.loaded,
+      hierarchyPages: this.hierarchy.pagesRead,
       residentPoints: this.cache.points,
       budgetPoints: this.cache.budget,
       decoder: { backend: this.backend || 'default', tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },

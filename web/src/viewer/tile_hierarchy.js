@@ -6,14 +6,17 @@ import { TileNode } from './tile_node.js';
 const MAX_PAGES_IN_FLIGHT = 2;
 
 export class TileHierarchy {
-  constructor(api, datasetId, grid) {
+  // pageDepth: levels per page (the query's depth), null for the daemon's default.
+  constructor(api, datasetId, grid, pageDepth = null) {
     this.api = api;
     this.datasetId = datasetId;
     this.grid = grid;
+    this.query = pageDepth === null ? '' : `?depth=${pageDepth}`;
     this.nodes = new Map();
     this.root = null;
     this.pending = new Set(); // keys of pages being fetched
     this.failed = new Set();
+    this.pagesRead = 0;
     this.onChange = () => {};
   }
 
@@ -43,8 +46,9 @@ export class TileHierarchy {
     const key = TileNode.key(level, x, y, z);
     this.pending.add(key);
     try {
-      const page = await this.api.json(`/v1/datasets/${encodeURIComponent(this.datasetId)}/hierarchy/${key}`);
+      const page = await this.api.json(`/v1/datasets/${encodeURIComponent(this.datasetId)}/hierarchy/${key}${this.query}`);
       this.merge(page);
+      this.pagesRead++;
     } finally {
       this.pending.delete(key);
     }
