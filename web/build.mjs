@@ -9,7 +9,7 @@
 // into assets under a hashed name and its URL reaches the worker the same way (POINTDAG_WASM_URL,
 // null without it).
 import { createHash } from 'node:crypto';
-import { copyFileSync, existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { copyFileSync, existsSync, mkdirSync, readFileSync, renameSync, rmSync, writeFileSync } from 'node:fs';
 import { dirname, join, relative, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import * as esbuild from 'esbuild';
@@ -89,8 +89,10 @@ function indexHtml(scriptUrl, cssUrl) {
 async function main() {
   const { outDir: outArg, wasmDir } = parseArgs(process.argv.slice(2));
   const outDir = resolve(outArg);
-  const assetsDir = join(outDir, 'assets');
-  rmSync(assetsDir, { recursive: true, force: true });
+  // Built beside the output and moved in at the end: a failed build leaves the previous one whole.
+  const staging = join(outDir, '.staging');
+  const assetsDir = join(staging, 'assets');
+  rmSync(staging, { recursive: true, force: true });
   mkdirSync(assetsDir, { recursive: true });
 
   const wasm = copyWasm(wasmDir, assetsDir);
@@ -102,6 +104,7 @@ async function main() {
     entryNames: '[name]-[hash]',
     format: 'esm',
     define: { POINTDAG_WASM_URL: JSON.stringify(wasm) },
+    external: ['/assets/*'], // the WASM decoder, imported at run time
   });
   const workerFile = outputOf(worker.metafile, 'src/decoder/decode_worker.js');
 
@@ -115,14 +118,18 @@ async function main() {
     assetNames: '[name]-[hash]',
     format: 'esm',
     splitting: true, // the home page loads without three.js
-    define: { POINTDAG_WORKER_URL: JSON.stringify(assetUrl(outDir, workerFile)) },
+    define: { POINTDAG_WORKER_URL: JSON.stringify(assetUrl(staging, workerFile)) },
   });
   const appJs = outputOf(app.metafile, 'src/app/main.js');
   const appCss = app.metafile.outputs[appJs].cssBundle;
   if (!appCss) throw new Error('esbuild wrote no stylesheet for src/app/main.js');
 
-  writeFileSync(join(outDir, 'index.html'), indexHtml(assetUrl(outDir, appJs), assetUrl(outDir, appCss)));
-  console.log(`build.mjs: wrote ${join(outDir, 'index.html')} and ${assetsDir}` +
+  writeFileSync(join(staging, 'index.html'), indexHtml(assetUrl(staging, appJs), assetUrl(staging, appCss)));
+  rmSync(join(outDir, 'assets'), { recursive: true, force: true });
+  renameSync(assetsDir, join(outDir, 'assets'));
+  renameSync(join(staging, 'index.html'), join(outDir, 'index.html'));
+  rmSync(staging, { recursive: true, force: true });
+  console.log(`build.mjs: wrote ${join(outDir, 'index.html')} and ${join(outDir, 'assets')}` +
               (wasm ? ' (with the WASM decoder)' : ''));
 }
 

@@ -60,7 +60,7 @@ async function measure(browser, opts, path) {
       const viewer = window.pointdagViewer;
       const error = document.querySelector('#viewer-error');
       return (viewer && (viewer.state().finestVisibleLevelDrawn || viewer.state().lastError)) || (error && !error.hidden);
-    }, null, { timeout: 300_000, polling: 50 });
+    }, null, { timeout: 120_000, polling: 50 });
     const error = await page.locator('#viewer-error').textContent();
     if (error) throw new Error(error);
     const state = await page.evaluate(() => window.pointdagViewer.state());
