@@ -6,8 +6,8 @@
 // web/node_modules: the page never reaches a CDN or an external font.
 // The decode worker is its own entry; its hashed URL reaches the app through `define`
 // (POINTDAG_WORKER_URL). When --wasm-dir holds the WASM decoder (pdag_decoder.mjs), it is copied
-// into assets under a hashed name and its URL reaches the worker the same way (POINTDAG_WASM_URL,
-// null without it).
+// into assets under a hashed name and its URL reaches the app the same way (POINTDAG_WASM_URL,
+// null without it), which hands it to the worker as its `?wasm=` query parameter.
 import { createHash } from 'node:crypto';
 import { copyFileSync, existsSync, mkdirSync, readFileSync, renameSync, rmSync, writeFileSync } from 'node:fs';
 import { dirname, join, relative, resolve } from 'node:path';
@@ -103,8 +103,6 @@ async function main() {
     outdir: assetsDir,
     entryNames: '[name]-[hash]',
     format: 'esm',
-    define: { POINTDAG_WASM_URL: JSON.stringify(wasm) },
-    external: ['/assets/*'], // the WASM decoder, imported at run time
   });
   const workerFile = outputOf(worker.metafile, 'src/decoder/decode_worker.js');
 
@@ -118,7 +116,10 @@ async function main() {
     assetNames: '[name]-[hash]',
     format: 'esm',
     splitting: true, // the home page loads without three.js
-    define: { POINTDAG_WORKER_URL: JSON.stringify(assetUrl(staging, workerFile)) },
+    define: {
+      POINTDAG_WORKER_URL: JSON.stringify(assetUrl(staging, workerFile)),
+      POINTDAG_WASM_URL: JSON.stringify(wasm),
+    },
   });
   const appJs = outputOf(app.metafile, 'src/app/main.js');
   const appCss = app.metafile.outputs[appJs].cssBundle;

@@ -63,7 +63,9 @@ test('the dataset page draws the scan from .pdag tiles where its bounds project'
   await page.goto(`${daemon.url}${datasetPath}?pagedepth=1`);
   pdagDrawn = await checkDrawn(page, 'pdag', t);
   const { state } = pdagDrawn;
+  t.diagnostic(`decoded ${state.decoder.tiles} tiles with ${state.decoder.backend} in ${state.decoder.ms.toFixed(0)} ms`);
   assert.ok(state.bytesFetched > 0 && state.decoder.tiles > 0, JSON.stringify(state));
+  assert.match(state.decoder.backend, /^(js|wasm)$/);
   // The root's page, then one for each of Autzen's two level-1 tiles, whose children the view needs.
   assert.equal(state.hierarchyPages, 3);
   assert.equal(state.errors, 0);

@@ -1,5 +1,5 @@
 // A pool of decode workers (contract 2 of the web brief): each tile's bytes are transferred to the
-// least busy worker, which answers {id, ok, count, depth, voxelSize, origin, coords, colors, decodeMs}.
+// least busy worker, which answers {id, ok, backend, count, depth, voxelSize, origin, coords, colors, decodeMs}.
 export class DecoderPool {
   // backend: 'js' | 'wasm' | undefined (the worker's default, the faster one).
   constructor(workerUrl, size, backend) {
@@ -10,6 +10,7 @@ export class DecoderPool {
     this.decoded = 0;
     this.decodeMs = 0;
     this.decodedVoxels = 0;
+    this.backendUsed = null; // what the workers report they decoded with ('js' | 'wasm')
     this.error = null;
     for (let i = 0; i < size; ++i) {
       const worker = new Worker(workerUrl, { type: 'module' });
@@ -46,6 +47,7 @@ export class DecoderPool {
     this.decoded++;
     this.decodeMs += msg.decodeMs;
     this.decodedVoxels += msg.count;
+    this.backendUsed = msg.backend;
     job.resolve(msg);
   }
 

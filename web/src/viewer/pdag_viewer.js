@@ -1,7 +1,7 @@
 // Streams a dataset's .pdag tiles (GET /v1/datasets/{id}/tiles/...) into a SceneView: hierarchy
 // pages on demand, tiles chosen per frame by LodSelector, fetched by TileLoader, decoded in a
 // DecoderPool of Web Workers, kept by TileCache within a budget of points.
-/* global POINTDAG_WORKER_URL */
+/* global POINTDAG_WORKER_URL, POINTDAG_WASM_URL */
 import { formatBytes, formatInt } from '../app/format.js';
 import { DecoderPool } from './decoder_pool.js';
 import { LodSelector } from './lod_selector.js';
@@ -17,6 +17,10 @@ const DEFAULTS = {
   budget: 10_000_000, sse: 1.5, inflight: 6,
   workers: Math.min(4, Math.max(2, (navigator.hardwareConcurrency || 2) - 1)),
 };
+
+// The decode worker (contract 2), told where the WebAssembly decoder is when the build has one.
+const WORKER_URL = POINTDAG_WASM_URL
+  ? `${POINTDAG_WORKER_URL}?wasm=${encodeURIComponent(POINTDAG_WASM_URL)}` : POINTDAG_WORKER_URL;
 
 function numberParam(params, name) {
   return positiveParam(params, name, DEFAULTS[name]);
@@ -40,8 +44,8 @@ export class PdagViewer {
     this.hierarchy.onChange = () => view.requestRender();
     this.selector = new LodSelector(this.hierarchy, grid.finestLevel, numberParam(params, 'sse'));
     this.cache = new TileCache(view.scene, numberParam(params, 'budget'));
-    this.backend = params.get('decoder') || undefined;
-    this.pool = new DecoderPool(POINTDAG_WORKER_URL, numberParam(params, 'workers'), this.backend);
+    const backend = params.get('decoder') || undefined;
+    this.pool = new DecoderPool(WORKER_URL, numberParam(params, 'workers'), backend);
     this.loader = new TileLoader({
       api, datasetId: dataset.id, pool: this.pool, cache: this.cache,
       materials: new PointMaterials(view.camera), frameOrigin: this.frameOrigin,
@@ -112,7 +116,7 @@ export class PdagViewer {
       hierarchyPages: this.hierarchy.pagesRead,
       residentPoints: this.cache.points,
       budgetPoints: this.cache.budget,
-      decoder: { backend: this.backend || 'default', tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
+      decoder: { backend: this.pool.backendUsed, tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
       errors: this.loader.failures,
       lastError: this.loader.lastError,
     };
