@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
   service_config.upload_dir = config.data_dir / "uploads";
   service_config.cors_origins = config.cors_origins;
   service_config.tile_cache_bytes = config.tile_cache_mb << 20;
+  service_config.tiles3d_cache_bytes = config.tiles3d_cache_mb << 20;
   Service service(**store, jobs, metrics, service_config);
   HttpServer server(service, metrics, config.http_threads, config.http);
   auto port = server.Listen(config.host, config.port);
