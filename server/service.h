@@ -1,6 +1,6 @@
 // The HTTP API of pointdagd (proto/PROTOCOL.md) as plain functions of a request: no sockets here,
-// so every rule — auth, limits, ETag/304, Range/206/416, CORS — lives in one place the transport
-// (http_server.cc) merely carries.
+// so every rule — auth, limits, ETag/304, Range/206/416 (answers.h), CORS — lives in one place the
+// transport (http_server.cc) merely carries. The 3D Tiles routes are tiles3d_service.h's.
 #pragma once
 
 #include <filesystem>
