@@ -76,7 +76,7 @@ GlbPoints ReadGlb(std::span<const uint8_t> glb) {
   EXPECT_EQ(g["buffers"][0]["byteLength"], bin_length);
   EXPECT_FALSE(g["buffers"][1].contains("uri"));
   EXPECT_EQ(g["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"], true);
-  EXPECT_EQ(g["scenes"][g["scene"].get<int>()]["nodes"], nlohmann::json({0}));
+  EXPECT_EQ(g["scenes"][g["scene"].get<int>()]["nodes"], nlohmann::json::array({0}));
   EXPECT_EQ(g["nodes"].size(), 1u);
   EXPECT_EQ(g["meshes"].size(), 1u);
   EXPECT_EQ(g["meshes"][0]["primitives"].size(), 1u);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <set>
+#include <thread>
 
 #include "client.h"
 #include "daemon_util.h"
@@ -199,6 +200,28 @@ TEST_F(Tiles3dServer, DeleteDropsTheTilesetAndContents) {
   EXPECT_EQ(c->Request("DELETE", dataset, kAuth)->status, 204);
   EXPECT_EQ(c->Request("GET", dataset + "/3dtiles/tileset.json")->status, 404);
   EXPECT_EQ(c->Request("GET", dataset + "/3dtiles/0/0/0/0.glb")->status, 404);
+}
+
+TEST_F(Tiles3dServer, ConcurrentFirstReadsOfADatasetAgree) {
+  SKIP_WITHOUT_DATA();
+  // A dataset nobody has read yet: every thread misses the cache and transcodes on its own.
+  const std::string dataset = Ingest("autzen_trim_las14_pdrf7_rgb.las", "name=concurrent&voxel=1");
+  ASSERT_FALSE(dataset.empty());
+  const std::vector<std::string> targets = {dataset + "/3dtiles/tileset.json", dataset + "/3dtiles/0/0/0/0.glb",
+                                            dataset + "/3dtiles/1/0/0/0.glb"};
+  std::vector<std::vector<Response>> answers(4);
+  std::vector<std::thread> threads;
+  for (auto& mine : answers) {
+    threads.emplace_back([&] {
+      auto c = daemon_->Connect();
+      for (const std::string& t : targets) mine.push_back(*c->Request("GET", t));
+    });
+  }
+  for (auto& t : threads) t.join();
+  for (size_t i = 0; i < targets.size(); ++i) {
+    EXPECT_EQ(answers[0][i].status, 200) << targets[i];
+    for (const auto& other : answers) EXPECT_EQ(other[i].body, answers[0][i].body) << targets[i];
+  }
 }
 
 // Reads that need a token: the 3D Tiles routes follow the tiles' rules.

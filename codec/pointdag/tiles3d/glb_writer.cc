@@ -128,7 +128,7 @@ StatusOr<std::vector<uint8_t>> WriteTileGlb(const VoxelGrid& tile) {
       {"extensionsUsed", extensions},
       {"extensionsRequired", extensions},
       {"scene", 0},
-      {"scenes", {{{"nodes", {0}}}}},
+      {"scenes", {{{"nodes", nlohmann::json::array({0})}}}},
       {"nodes", {{{"mesh", 0}, {"matrix", TileNodeMatrix(tile.origin, tile.voxel_size)}}}},
       {"meshes", {{{"primitives", {{{"attributes", attributes}, {"mode", 0}}}}}}},
       {"accessors", accessors},
