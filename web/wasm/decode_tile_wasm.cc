@@ -52,7 +52,10 @@ ResultCode CodeOf(StatusCode code) {
 
 Result* Fail(Result* r, const pointdag::Status& status) {
   r->code = CodeOf(status.code());
-  r->message = status.ToString();
+  // The JS side prefixes the code; a C++ code that maps onto another (kTruncated) keeps its name.
+  const bool same = status.code() == StatusCode::kCorrupt || status.code() == StatusCode::kResourceLimit ||
+                    status.code() == StatusCode::kUnsupported;
+  r->message = same ? status.message() : status.ToString();
   return r;
 }
 

@@ -8,13 +8,13 @@ export const CODEC_RAW = 0;
 export const CODEC_LOSSLESS = 1;
 export const CODEC_FIXED3 = 2;
 export const CODEC_VBR = 3;
-const IMAGE_CODECS = { 4: 'png', 5: 'jpeg', 6: 'webp', 7: 'astc' };
+const IMAGE_CODECS = new Set([4, 5, 6, 7]);  // png, jpeg, webp, astc
 const MAX_COLORS = 2 ** 32;
 
 // Why this decoder cannot read a colors section with this codec byte, or null when it can.
 export function unsupportedColorCodec(codec) {
   if (codec === CODEC_LOSSLESS) return 'lossless (zstd) colors';
-  if (IMAGE_CODECS[codec]) return `${IMAGE_CODECS[codec]} colors`;
+  if (IMAGE_CODECS.has(codec)) return `image-mapped colors (codec ${codec}: png, jpeg, webp or astc)`;
   return null;
 }
 

@@ -20,7 +20,7 @@ export class JsonFields {
     let key = null;
     const keys = path.split('/');
     for (let k = 0; k < keys.length; ++k) {
-      if (!isObject(node)) throw this.refuse(keys.slice(0, k).join('/'), 'is not an object');
+      if (!isObject(node)) throw this.refuse(`${keys.slice(0, k).join('/')}/`, 'is not an object');
       if (!Object.prototype.hasOwnProperty.call(node, keys[k])) return null;
       parent = node;
       key = keys[k];

@@ -62,7 +62,7 @@ export function parsePdagContainer(bytes) {
       try {
         meta = parseJson(data);
       } catch (err) {
-        throw corrupt(`.pdag metadata is not valid JSON: ${err.message}`);
+        throw corrupt(`.pdag metadata is ${err.detail}`);
       }
       const root = meta.root;
       if (typeof root !== 'object' || root === null || Array.isArray(root)) throw corrupt('.pdag metadata is not a JSON object');

@@ -3,10 +3,11 @@
 //   'ResourceLimit' the file asks for more than the decoder's limits allow,
 //   'Unsupported'   a real part of the format this decoder does not read (zstd, image codecs, another major version).
 export class PdagError extends Error {
-  constructor(code, message) {
-    super(`${code}: ${message}`);
+  constructor(code, detail) {
+    super(`${code}: ${detail}`);
     this.name = 'PdagError';
     this.code = code;
+    this.detail = detail;  // the message without the code
   }
 }
 
