@@ -8,6 +8,7 @@ import { fileURLToPath } from 'node:url';
 const root = resolve(dirname(fileURLToPath(import.meta.url)), '../../..');
 
 export const config = {
+  root,
   pointdagd: process.env.POINTDAGD || join(root, 'build/server/pointdagd'),
   cli: process.env.POINTDAG_CLI || join(root, 'build/tools/pointdag'),
   dataDir: process.env.POINTDAG_DATA_DIR || join(root, '../shared/data'),
