@@ -31,8 +31,7 @@ describe('decode worker', () => {
 
   test('replies with the voxels, their buffers to transfer, and the decode time', async () => {
     const want = decodePdag(tile);
-    const { reply, transfer } = await new DecodeService(failingFactory).handle({ id: 7, bytes: tile.slice().buffer });
-    assert.equal(DEFAULT_BACKEND, 'js');
+    const { reply, transfer } = await new DecodeService(failingFactory, 'js').handle({ id: 7, bytes: tile.slice().buffer });
     assert.equal(reply.id, 7);
     assert.equal(reply.ok, true);
     assert.equal(reply.backend, 'js');
@@ -61,7 +60,8 @@ describe('decode worker', () => {
     const explicit = await new DecodeService(failingFactory).handle({ id: 3, bytes: tile.slice().buffer, backend: 'wasm' });
     assert.equal(explicit.reply.ok, false);
     assert.match(explicit.reply.error, /WebAssembly decoder does not load: no such module/);
-    const service = new DecodeService(failingFactory, 'wasm');
+    assert.equal(DEFAULT_BACKEND, 'wasm');
+    const service = new DecodeService(failingFactory);
     const fallback = await service.handle({ id: 4, bytes: tile.slice().buffer });
     assert.equal(fallback.reply.ok, true);
     assert.equal(fallback.reply.backend, 'js');
@@ -81,7 +81,7 @@ describe('decode worker', () => {
     const glue = config.wasmDecoder ? `?wasm=${encodeURIComponent(pathToFileURL(config.wasmDecoder).href)}` : '';
     globalThis.self = { location: { href: `file:///worker.js${glue}` }, postMessage: (m, transfer) => posted.push({ m, transfer }) };
     await import('../../web/src/decoder/decode_worker.js');
-    await globalThis.self.onmessage({ data: { id: 9, bytes: tile.slice().buffer } });
+    await globalThis.self.onmessage({ data: { id: 9, bytes: tile.slice().buffer, backend: 'js' } });
     assert.equal(posted[0].m.ok, true);
     assert.equal(posted[0].m.count, 512);
     assert.equal(posted[0].transfer.length, 2);

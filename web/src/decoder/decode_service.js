@@ -3,12 +3,14 @@
 //   in:  {id, bytes: ArrayBuffer, backend?: 'js' | 'wasm'}
 //   out: {id, ok: true, backend, count, depth, voxelSize, origin, coords, colors, decodeMs} with
 //        coords' and colors' buffers to transfer, or {id, ok: false, error, code}.
-// The default backend is the faster one under web/bench/decode_bench.mjs (docs: JavaScript, by
-// 3-12% over the WebAssembly build on lion and autzen; both give identical voxels).
+// The default backend is the faster one in a browser's worker (web/bench/worker_bench.mjs, headless
+// Chromium 156: the WebAssembly build ~15% ahead on lion's tiles; under Node 20 the two are even,
+// web/bench/decode_bench.mjs). Both give identical voxels. A default that cannot load falls back to
+// the JavaScript decoder.
 import { decodePdag } from './decode_pdag.js';
 import { WasmDecoder } from './wasm_decoder.js';
 
-export const DEFAULT_BACKEND = 'js';
+export const DEFAULT_BACKEND = 'wasm';
 
 export class DecodeService {
   // `loadWasmFactory`: async () => the default export of pdag_decoder.mjs.
