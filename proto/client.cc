@@ -196,26 +196,16 @@ StatusOr<HierarchyPage> ParseHierarchyPage(std::string_view body, int max_level)
   return out;
 }
 
-StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
-                                    const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits) {
-  ASSIGN_OR_RETURN(const Url url, ParseUrl(dataset_url));
-  ASSIGN_OR_RETURN(std::unique_ptr<Connection> connection, Connection::Open(url.host, url.port, limits.max_body_bytes));
-  const auto get = [&](const std::string& target) -> StatusOr<Response> {
-    ASSIGN_OR_RETURN(Response r, connection->Request("GET", target));
-    if (r.status != 200) {
-      return IoError("GET " + target + " answered " + std::to_string(r.status) + ": " + r.body.substr(0, 200));
-    }
-    return r;
-  };
-  ASSIGN_OR_RETURN(const Response described, get(url.target));
-  ASSIGN_OR_RETURN(const DatasetShape shape, ParseDatasetShape(described.body));
-  FetchedLevel out;
-  out.level = level.value_or(shape.levels - 1);
-  if (out.level < 0 || out.level >= shape.levels) {
-    return InvalidArgument("the dataset has levels 0.." + std::to_string(shape.levels - 1) + ", not " + std::to_string(out.level));
-  }
-  // Walk the hierarchy pages down to the wanted level; a server that repeats a page (a cycle) or
-  // never stops is refused by the visited set and the limits.
+StatusOr<Response> GetOk(Connection& connection, const std::string& target) {
+  ASSIGN_OR_RETURN(Response r, connection.Request("GET", target));
+  if (r.status != 200) return IoError("GET " + target + " answered " + std::to_string(r.status) + ": " + r.body.substr(0, 200));
+  return r;
+}
+
+StatusOr<std::vector<TileAddress>> ListTiles(Connection& connection, const std::string& dataset_target, int max_level,
+                                             const FetchLimits& limits) {
+  // Walk the hierarchy pages down to max_level; a server that repeats a page (a cycle) or never
+  // stops is refused by the visited set and the limits.
   std::set<TileAddress> keys, visited;
   std::deque<TileAddress> pages = {TileAddress{}};
   while (!pages.empty()) {
@@ -224,16 +214,14 @@ StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optiona
     if (!visited.insert(page).second) return Malformed("the server lists hierarchy page " + std::to_string(page.level) + "/" +
                                                        std::to_string(page.x) + "/" + std::to_string(page.y) + "/" +
                                                        std::to_string(page.z) + " twice");
-    const int depth = std::min(4, out.level - page.level);
-    ASSIGN_OR_RETURN(const Response r, get(url.target + "/hierarchy/" + std::to_string(page.level) + "/" + std::to_string(page.x) +
-                                           "/" + std::to_string(page.y) + "/" + std::to_string(page.z) +
-                                           "?depth=" + std::to_string(depth)));
-    ASSIGN_OR_RETURN(const HierarchyPage parsed, ParseHierarchyPage(r.body, out.level));
-    for (const TileAddress& t : parsed.tiles) {
-      if (t.level == out.level) keys.insert(t);
-    }
-    if (keys.size() > limits.max_tiles) return ResourceLimit("the level has more than " + std::to_string(limits.max_tiles) + " tiles");
-    if (page.level + depth < out.level) {
+    const int depth = std::min(4, max_level - page.level);
+    ASSIGN_OR_RETURN(const Response r, GetOk(connection, dataset_target + "/hierarchy/" + std::to_string(page.level) + "/" +
+                                                             std::to_string(page.x) + "/" + std::to_string(page.y) + "/" +
+                                                             std::to_string(page.z) + "?depth=" + std::to_string(depth)));
+    ASSIGN_OR_RETURN(const HierarchyPage parsed, ParseHierarchyPage(r.body, max_level));
+    keys.insert(parsed.tiles.begin(), parsed.tiles.end());
+    if (keys.size() > limits.max_tiles) return ResourceLimit("the dataset has more than " + std::to_string(limits.max_tiles) + " tiles");
+    if (page.level + depth < max_level) {
       for (const TileAddress& p : parsed.pages) {
         if (p.level <= page.level) return Malformed("a hierarchy page lists a page that is not below it");
         pages.push_back(p);
@@ -243,11 +231,28 @@ StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optiona
       }
     }
   }
+  return std::vector<TileAddress>(keys.begin(), keys.end());
+}
+
+StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
+                                    const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits) {
+  ASSIGN_OR_RETURN(const Url url, ParseUrl(dataset_url));
+  ASSIGN_OR_RETURN(std::unique_ptr<Connection> connection, Connection::Open(url.host, url.port, limits.max_body_bytes));
+  const auto get = [&](const std::string& target) { return GetOk(*connection, target); };
+  ASSIGN_OR_RETURN(const Response described, get(url.target));
+  ASSIGN_OR_RETURN(const DatasetShape shape, ParseDatasetShape(described.body));
+  FetchedLevel out;
+  out.level = level.value_or(shape.levels - 1);
+  if (out.level < 0 || out.level >= shape.levels) {
+    return InvalidArgument("the dataset has levels 0.." + std::to_string(shape.levels - 1) + ", not " + std::to_string(out.level));
+  }
+  ASSIGN_OR_RETURN(const std::vector<TileAddress> listed, ListTiles(*connection, url.target, out.level, limits));
+  std::vector<TileAddress> ordered;
+  std::copy_if(listed.begin(), listed.end(), std::back_inserter(ordered), [&](const TileAddress& t) { return t.level == out.level; });
   out.grid.depth = shape.tile_depth + out.level;
   out.grid.origin = shape.origin;
   out.grid.voxel_size = std::ldexp(shape.voxel_size, shape.levels - 1 - out.level);
   out.grid.points_in = shape.points;
-  std::vector<TileAddress> ordered(keys.begin(), keys.end());
   std::sort(ordered.begin(), ordered.end(), [](const TileAddress& a, const TileAddress& b) {
     return MortonEncode(a.x, a.y, a.z) < MortonEncode(b.x, b.y, b.z);
   });

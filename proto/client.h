@@ -86,6 +86,14 @@ struct FetchLimits {
   uint64_t max_voxels = uint64_t{1} << 28;        // all tiles together
 };
 
+// A GET that must answer 200 (kIoError naming the target and the answer's start otherwise).
+StatusOr<Response> GetOk(Connection& connection, const std::string& target);
+
+// Every tile of the dataset at `dataset_target` (/v1/datasets/{id}) down to `max_level`, from its
+// hierarchy pages (§3) walked from the root, sorted by address.
+StatusOr<std::vector<TileAddress>> ListTiles(Connection& connection, const std::string& dataset_target, int max_level,
+                                             const FetchLimits& limits = {});
+
 struct FetchedLevel {
   int level = 0;
   size_t tiles = 0;

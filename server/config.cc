@@ -118,6 +118,7 @@ Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::s
   RETURN_IF_ERROR(r.Int("max_attempts", config.max_attempts, 1, 100));
   RETURN_IF_ERROR(r.Int("max_upload_bytes", config.max_upload_bytes, 1, std::numeric_limits<int64_t>::max()));
   RETURN_IF_ERROR(r.Int("tile_cache_mb", config.tile_cache_mb, 0, 1 << 20));
+  RETURN_IF_ERROR(r.Int("tiles3d_cache_mb", config.tiles3d_cache_mb, 0, 1 << 20));
   RETURN_IF_ERROR(r.Strings("cors_origins", config.cors_origins));
   std::string web_dir = config.web_dir.string();
   RETURN_IF_ERROR(r.String("web_dir", web_dir));

@@ -43,6 +43,7 @@ struct DaemonConfig {
   int max_attempts = 2;                   // a job that failed or crashed this often is not resumed
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   size_t tile_cache_mb = 256;
+  size_t tiles3d_cache_mb = 256;          // transcoded 3D Tiles (tilesets and .glb contents)
   std::vector<std::string> cors_origins{"*"};
   std::string log_level = "info";
   std::filesystem::path port_file;        // where to write the bound port (for --listen HOST:0)

@@ -127,6 +127,7 @@ int main(int argc, char** argv) {
     web = WebFiles();
   }
   service_config.web = std::make_shared<const WebFiles>(std::move(*web));
+  service_config.tiles3d_cache_bytes = config.tiles3d_cache_mb << 20;
   Service service(**store, jobs, metrics, service_config);
   HttpServer server(service, metrics, config.http_threads, config.http);
   auto port = server.Listen(config.host, config.port);

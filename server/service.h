@@ -1,6 +1,6 @@
 // The HTTP API of pointdagd (proto/PROTOCOL.md) as plain functions of a request: no sockets here,
-// so every rule — auth, limits, ETag/304, Range/206/416, CORS — lives in one place the transport
-// (http_server.cc) merely carries.
+// so every rule — auth, limits, ETag/304, Range/206/416 (answers.h), CORS — lives in one place the
+// transport (http_server.cc) merely carries. The 3D Tiles routes are tiles3d_service.h's.
 #pragma once
 
 #include <filesystem>
@@ -12,29 +12,15 @@
 #include <vector>
 
 #include "access.h"
+#include "answers.h"
 #include "jobs.h"
 #include "metrics.h"
 #include "store.h"
 #include "tile_cache.h"
+#include "tiles3d_service.h"
 #include "web_files.h"
 
 namespace pointdag::server {
-
-struct HttpRequest {
-  std::string method;
-  std::string target;                          // path and query, as received
-  std::map<std::string, std::string> headers;  // names in lower case
-  std::string body;                            // small bodies only; uploads go to a file
-  std::string Header(const std::string& lower_name) const;
-};
-
-struct HttpResponse {
-  int status = 200;
-  std::vector<std::pair<std::string, std::string>> headers;
-  std::string body;
-  std::string route;  // the metrics label, e.g. "/v1/datasets/{id}/tiles"
-  void SetHeader(const std::string& name, const std::string& value);
-};
 
 struct ServiceConfig {
   std::string token;       // write scope (uploads, DELETE; reads too); empty: writes need no token
@@ -45,6 +31,7 @@ struct ServiceConfig {
   std::filesystem::path upload_dir;
   size_t tile_cache_bytes = size_t{256} << 20;
   std::shared_ptr<const WebFiles> web;  // the viewer's static files; null or empty: no viewer
+  size_t tiles3d_cache_bytes = size_t{256} << 20;  // transcoded 3D Tiles contents and tilesets
 };
 
 class Service {
@@ -66,19 +53,13 @@ class Service {
   void set_ready(bool ready) { ready_ = ready; }
 
  private:
-  // Answers without CORS; the public entry points add it for the request's Origin.
-  HttpResponse Json(int status, const nlohmann::json& body, const std::string& route) const;
-  HttpResponse Fail(int status, const std::string& message, const std::string& route) const;
-  // 503 with Retry-After when another process holds the store's lock, else 500.
-  HttpResponse StoreFailure(const Status& status, const std::string& route) const;
+  // Answers are built without CORS (answers.h); the public entry points add it for the request's Origin.
   // An answer refusing the request (400, 401, 403), or nullopt when it may go on.
   std::optional<HttpResponse> Deny(const HttpRequest& request, Scope needed, const std::string& route) const;
   HttpResponse Route(const HttpRequest& request);
   std::optional<HttpResponse> Admit(const HttpRequest& request) const;
   HttpResponse Finish(const HttpRequest& request, const std::filesystem::path& file);
   HttpResponse GetJob(const std::string& id);
-  // 404 naming what is missing: the dataset, or `what` within it.
-  HttpResponse NotFound(const std::string& dataset, const std::string& what, const std::string& route);
   HttpResponse GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key);
   HttpResponse GetHierarchy(const HttpRequest& request, const std::string& dataset, const TileKey& key);
   static nlohmann::json JobJson(const JobRecord& job);
@@ -90,11 +71,9 @@ class Service {
   AccessPolicy access_;
   CorsPolicy cors_;
   TileCache cache_;
+  Tiles3dService tiles3d_;
   bool ready_ = false;
 };
-
-// Whether an If-None-Match value names `etag` (a list of tags, or exactly "*").
-bool EtagMatches(const std::string& if_none_match, const std::string& etag);
 
 // "a=1&b=x%20y" -> {a: 1, b: "x y"}.
 std::map<std::string, std::string> ParseQuery(const std::string& query);

@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "service.h"
+#include "answers.h"
 
 namespace pointdag::server {
 namespace {

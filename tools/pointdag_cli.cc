@@ -4,6 +4,7 @@
 //   pointdag info IN.pdag [--json]
 //   pointdag compare IN (--voxel SIZE | --depth D) [--json]
 //   pointdag bench [--data DIR] [--json]
+//   pointdag export IN.pdag|URL --3dtiles DIR
 // Exit codes: 0 ok, 1 bad input (message on stderr), 2 usage.
 #include <unistd.h>
 
@@ -15,6 +16,7 @@
 #include <iostream>
 
 #include "bench.h"
+#include "export_3dtiles.h"
 #include "pointdag/compare/scorecard.h"
 #include "pointdag/container/json_fields.h"
 #include "pointdag/gpu/stage_device.h"
@@ -97,6 +99,17 @@ int RunFetch(const std::string& url, std::optional<int> level, const std::string
   std::fprintf(stderr, "%s: level %d, %zu tiles (%llu bytes), %zu voxels of %.6g in %.2f s\n", output.c_str(), fetched->level,
                fetched->tiles, static_cast<unsigned long long>(fetched->tile_bytes), fetched->grid.morton.size(),
                fetched->grid.voxel_size, seconds);
+  return 0;
+}
+
+int RunExport(const std::string& source, const std::string& dir) {
+  const bool remote = source.rfind("http://", 0) == 0;
+  const auto report = remote ? ExportTiles3dFromUrl(source, dir) : ExportTiles3dFromPdag(source, dir);
+  if (!report.ok()) return Fail(report.status());
+  std::fprintf(stderr, "%s: %zu tiles, %llu bytes of .pdag -> %llu bytes of .glb + tileset.json %llu bytes; transcoded in %.2f s, all in %.2f s\n",
+               dir.c_str(), report->tiles, static_cast<unsigned long long>(report->pdag_bytes),
+               static_cast<unsigned long long>(report->glb_bytes), static_cast<unsigned long long>(report->tileset_bytes),
+               report->transcode_seconds, report->seconds);
   return 0;
 }
 
@@ -285,6 +298,11 @@ int Main(int argc, char** argv) {
   fetch->add_option("--level", level, "level of detail (0 = coarsest; default: the finest)")->check(CLI::NonNegativeNumber);
   fetch->add_option("-o,--output", output, "output .ply (voxel centres in the dataset's frame + RGB)")->required();
 
+  std::string tiles3d_dir;
+  auto* export_cmd = app.add_subcommand("export", "a dataset (a .pdag, or a pointdagd URL) as 3D Tiles 1.1 static files");
+  export_cmd->add_option("input", input, "IN.pdag or http://HOST:PORT/v1/datasets/ID")->required();
+  export_cmd->add_option("--3dtiles", tiles3d_dir, "output folder: tileset.json and {level}/{x}/{y}/{z}.glb")->required();
+
   BenchOptions bench_options;
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
@@ -333,6 +351,7 @@ int Main(int argc, char** argv) {
   if (compare->parsed()) return RunCompare(input, grid, json);
   if (bench->parsed()) return RunBench(bench_options);
   if (fetch->parsed()) return RunFetch(url, level, output);
+  if (export_cmd->parsed()) return RunExport(input, tiles3d_dir);
   return 2;
 }
 

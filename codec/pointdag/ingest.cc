@@ -28,6 +28,16 @@ double RoundUpTo125(double spacing) {
   return 10 * decade;
 }
 
+TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_db) {
+  TilingOptions tiling;
+  tiling.tile_depth = tile_depth;
+  tiling.colors = {ColorCodec::kVariableRate, quality_db.value_or(38.0)};
+  // Two refinements instead of eight: every tile still meets the target, at a few percent more
+  // color bits, for a third of the encoding time (docs/benchmarks.md).
+  tiling.colors.search_steps = 2;
+  return tiling;
+}
+
 StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const IngestOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const auto report = [&](std::string_view stage, double fraction) {
@@ -56,12 +66,7 @@ StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const Inges
   out.voxelize_seconds = since(start);
   auto stage_start = std::chrono::steady_clock::now();
 
-  TilingOptions tiling;
-  tiling.tile_depth = options.tile_depth;
-  tiling.colors = {ColorCodec::kVariableRate, options.quality_db.value_or(38.0)};
-  // Two refinements instead of eight: every tile still meets the target, at a few percent more
-  // color bits, for a third of the encoding time (docs/benchmarks.md).
-  tiling.colors.search_steps = 2;
+  TilingOptions tiling = IngestTilingOptions(options.tile_depth, options.quality_db);
   tiling.progress = [&](uint64_t done, uint64_t total) { report("tile", double(done) / double(total)); };
   ASSIGN_OR_RETURN(out.tiles, BuildTiles(out.grid, out.scan, path.filename().string(), tiling));
   out.tile_seconds = since(stage_start);

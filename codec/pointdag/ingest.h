@@ -45,6 +45,10 @@ struct IngestedScan {
 
 StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const IngestOptions& options);
 
+// How IngestScan cuts the finest voxels into tiles (VBR colors at quality_db, 38 dB when not given),
+// for anyone who must cut the same tiles (`pointdag export`).
+TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_db);
+
 // A voxel size from point spacing: the smallest 1-2-5 step (…, 0.1, 0.2, 0.5, 1, 2, …) >= spacing.
 double RoundUpTo125(double spacing);
 

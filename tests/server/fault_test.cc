@@ -92,6 +92,13 @@ TEST_F(FaultTest, ACorruptTileIs500WithAMetricNeverTheWrongBytes) {
   EXPECT_EQ(Json(r)["error"], "tile 0/0/0/0 of dataset " + dataset +
                                   " is corrupt in the store (its bytes do not match their checksum); run pointdagd --check");
   EXPECT_NE(c->Request("GET", "/metrics")->body.find("\npointdag_corrupt_tiles_total 1\n"), std::string::npos);
+  // Its 3D Tiles are refused alike: nothing is transcoded from bytes that are not what was committed.
+  for (const std::string resource : {"tileset.json", "0/0/0/0.glb"}) {
+    const Response t = *c->Request("GET", "/v1/datasets/" + dataset + "/3dtiles/" + resource);
+    EXPECT_EQ(t.status, 500) << resource;
+    EXPECT_EQ(Json(t)["error"], Json(r)["error"]) << resource;
+  }
+  EXPECT_NE(c->Request("GET", "/metrics")->body.find("\npointdag_corrupt_tiles_total 3\n"), std::string::npos);
   EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
 
   daemon.Stop(SIGTERM);

@@ -11,15 +11,13 @@
 #include <memory>
 #include <string>
 
-#include "pointdag/entropy/adaptive_codes.h"
+#include "pointdag/color/block_stream.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
 
 namespace pointdag {
 namespace {
-
-constexpr uint8_t kBlockStreamVersion = 1;
 
 struct Candidate {
   uint32_t start, length;  // within the macro block
@@ -125,19 +123,6 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32
   return out;
 }
 
-// Models of the block stream. Contexts: the previous block's width for lengths and widths; the
-// channel for endpoint differences (and the width for B - A); the width and the previous weight of
-// the same block for weights, since Morton neighbours tend to sit at the same point of a gradient.
-struct BlockModels {
-  std::array<GammaModel, kMaxWeightBits + 1> length;
-  std::array<BitTreeModel<3>, kMaxWeightBits + 1> width;
-  std::array<GammaModel, 3> a;
-  std::array<std::array<GammaModel, 3>, kMaxWeightBits + 1> b;
-  std::array<std::array<BitTreeModel<kMaxWeightBits>, 17>, kMaxWeightBits + 1> weight;  // 16 = first of a block
-};
-
-constexpr int kLengthBits = std::bit_width(kMacroBlockColors);
-constexpr int kDifferenceBits = 9;  // zigzag of -255..255, plus one
 
 std::vector<ColorBlock> EncodeBlocksOnCpu(std::span<const Rgb8> colors, BlockLayout layout, Threshold threshold) {
   // Macro blocks are independent: encode them in parallel, concatenate in order.
@@ -249,120 +234,6 @@ StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std
   PutVarint(out, payload.size());  // a range decoder may not miss its last bytes: cuts must show
   out.insert(out.end(), payload.begin(), payload.end());
   return out;
-}
-
-StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count) {
-  if (stored.size() < 4) return Truncated("color stream is shorter than its header");
-  if (stored[0] != kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
-  const auto layout = static_cast<BlockLayout>(stored[1]);
-  if (layout != BlockLayout::kFixedRate && layout != BlockLayout::kVariableRate) return Corrupt("color stream layout is unknown");
-  size_t pos = 4;
-  uint64_t count = 0, blocks = 0;
-  uint64_t payload_size = 0;
-  if (!GetVarint(stored, pos, count) || !GetVarint(stored, pos, blocks) || !GetVarint(stored, pos, payload_size)) {
-    return Truncated("color stream header is cut short");
-  }
-  if (payload_size != stored.size() - pos) return Truncated("color stream is not as long as its header says");
-  if (count != expected_count) return Corrupt("color stream holds " + std::to_string(count) + " colors, expected " + std::to_string(expected_count));
-  if (count > 0xFFFFFFFFull || blocks > count || (count > 0 && blocks == 0)) return Corrupt("color stream block count is impossible");
-  // A block of 16384 colors costs at least 11 raw bits of its length's gamma code, and no block
-  // covers more colors per bit: a byte of payload holds less than one macro block of colors.
-  if (count / kMacroBlockColors > payload_size + 8) {
-    return Corrupt("color stream declares " + std::to_string(count) + " colors, more than its " +
-                   std::to_string(payload_size) + " bytes can hold");
-  }
-
-  BlockColorDecoder d;
-  d.count_ = count;
-  auto models = std::make_unique<BlockModels>();
-  BinaryRangeDecoder rc(stored.subspan(pos));
-  uint64_t next = 0, weight_bits = 0;
-  int prev_bits = 0;
-  Rgb8 prev_a{};
-  d.weights_.assign(2, 0);  // grows with the weights really decoded, plus one word of padding
-  for (uint64_t k = 0; k < blocks; ++k) {
-    const uint32_t length = DecodeGamma(rc, models->length[prev_bits], kLengthBits);
-    const int bits = layout == BlockLayout::kVariableRate ? static_cast<int>(DecodeBitTree<3>(rc, models->width[prev_bits]))
-                                                          : kFixedRateBits;
-    if (bits > kMaxWeightBits) return Corrupt("color block has more than 4 bits per weight");
-    if (length == 0 || length > count - next) return Corrupt("color block length is impossible");
-    if (next / kMacroBlockColors != (next + length - 1) / kMacroBlockColors) return Corrupt("color block crosses a macro block");
-    int a[3], e[3];
-    const uint8_t pa[3] = {prev_a.r, prev_a.g, prev_a.b};
-    for (int ch = 0; ch < 3; ++ch) a[ch] = pa[ch] + UnZigZag(DecodeGamma(rc, models->a[ch], kDifferenceBits));
-    for (int ch = 0; ch < 3; ++ch) e[ch] = bits ? a[ch] + UnZigZag(DecodeGamma(rc, models->b[bits][ch], kDifferenceBits)) : a[ch];
-    for (int ch = 0; ch < 3; ++ch) {
-      if (a[ch] < 0 || a[ch] > 255 || e[ch] < 0 || e[ch] > 255) return Corrupt("color block endpoint outside 0..255");
-    }
-    Endpoints ends{{uint8_t(a[0]), uint8_t(a[1]), uint8_t(a[2])}, {uint8_t(e[0]), uint8_t(e[1]), uint8_t(e[2])}};
-    d.starts_.push_back(static_cast<uint32_t>(next));
-    d.weight_offsets_.push_back(weight_bits);
-    d.bits_.push_back(static_cast<uint8_t>(bits));
-    d.ends_.push_back(ends);
-    uint32_t prev_w = 16;
-    if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
-    for (uint32_t i = 0; bits && i < length; ++i) {
-      const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][prev_w], bits);
-      d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);
-      if ((weight_bits & 63) + static_cast<uint64_t>(bits) > 64) d.weights_[(weight_bits >> 6) + 1] |= uint64_t{w} >> (64 - (weight_bits & 63));
-      weight_bits += static_cast<uint64_t>(bits);
-      prev_w = w;
-    }
-    if (rc.overrun()) return Truncated("color stream is cut short");
-    next += length;
-    prev_bits = bits;
-    prev_a = ends.a;
-  }
-  if (next != count) return Corrupt("color blocks do not cover every color");
-  d.weights_.resize((weight_bits + 63) / 64 + 1);
-  // Macro-block table: the first block of every macro block.
-  const uint64_t macros = (d.count_ + kMacroBlockColors - 1) / kMacroBlockColors;
-  for (uint64_t m = 0, k = 0; m <= macros; ++m) {
-    while (k < d.starts_.size() && d.starts_[k] < m * kMacroBlockColors) ++k;
-    d.macro_first_block_.push_back(static_cast<uint32_t>(k));
-  }
-  return d;
-}
-
-uint32_t BlockColorDecoder::Weight(uint64_t bit_offset, int bits) const {
-  const uint64_t word = bit_offset >> 6;
-  const unsigned shift = bit_offset & 63;
-  uint64_t v = weights_[word] >> shift;
-  if (shift + static_cast<unsigned>(bits) > 64) v |= weights_[word + 1] << (64 - shift);
-  return static_cast<uint32_t>(v & ((1u << bits) - 1));
-}
-
-Rgb8 BlockColorDecoder::FromBlock(size_t block, uint64_t index) const {
-  const int bits = bits_[block];
-  if (bits == 0) return ends_[block].a;
-  return Interpolate(ends_[block], Weight(weight_offsets_[block] + (index - starts_[block]) * bits, bits), bits);
-}
-
-Rgb8 BlockColorDecoder::At(uint64_t index) const {
-  const uint64_t macro = index / kMacroBlockColors;
-  const auto first = starts_.begin() + macro_first_block_[macro];
-  const auto last = starts_.begin() + macro_first_block_[macro + 1];
-  const auto it = std::upper_bound(first, last, static_cast<uint32_t>(index));
-  return FromBlock(static_cast<size_t>(it - starts_.begin()) - 1, index);
-}
-
-void BlockColorDecoder::Decode(uint64_t begin, uint64_t end, Rgb8* out) const {
-  if (begin >= end) return;
-  size_t block = static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), static_cast<uint32_t>(begin)) - starts_.begin()) - 1;
-  for (uint64_t i = begin; i < end; ++i) {
-    while (block + 1 < starts_.size() && starts_[block + 1] <= i) ++block;
-    *out++ = FromBlock(block, i);
-  }
-}
-
-std::vector<Rgb8> BlockColorDecoder::DecodeAll() const {
-  std::vector<Rgb8> colors(count_);
-  Decode(0, count_, colors.data());
-  return colors;
-}
-
-size_t BlockColorDecoder::ResidentBytes() const {
-  return starts_.size() * (4 + 8 + 1 + sizeof(Endpoints)) + macro_first_block_.size() * 4 + weights_.size() * 8;
 }
 
 }  // namespace pointdag

@@ -1,0 +1,203 @@
+// Hostile .pdag input for the browser's decoders: truncations and bit flips of a real tile, and
+// headers that lie about their counts. Each must end in a PdagError (or, for a flip the format
+// ignores, in the same voxels), quickly, without a crash, and the JavaScript decoder must fail
+// exactly where the C++ one (compiled to WebAssembly) fails: at the same check, or with the same output.
+import assert from 'node:assert/strict';
+import { before, describe, test } from 'node:test';
+
+import { PdagError, decodePdag } from '../../web/src/decoder/decode_pdag.js';
+import { WASM_SKIPPED, config, loadWasm, scan } from './lib/config.mjs';
+import { denseCube, framePdag, sectionsOf, utf8, varint, writeGeometry } from './lib/pdag_writer.mjs';
+import { Daemon, fetchTile, ingest, listTiles } from './lib/pointdagd.mjs';
+
+const CODES = new Set(['Corrupt', 'ResourceLimit', 'Unsupported']);
+const MAX_DECODE_MS = 2000;  // a hostile input is refused in linear time: far below this
+
+// 'ok' with the result, or the PdagError's code; anything else thrown fails the test.
+function outcome(decode, bytes, what) {
+  const start = performance.now();
+  let result;
+  try {
+    result = { code: 'ok', value: decode(bytes) };
+  } catch (err) {
+    if (!(err instanceof PdagError)) throw new Error(`${what}: threw ${err?.stack ?? err}, not a PdagError`);
+    assert.ok(CODES.has(err.code), `${what}: unknown code ${err.code}`);
+    result = { code: err.code, message: err.message, detail: err.detail };
+  }
+  const ms = performance.now() - start;
+  assert.ok(ms < MAX_DECODE_MS, `${what}: took ${ms.toFixed(0)} ms`);
+  return result;
+}
+
+// The check that refused the input, as its message says: the C++ one names kTruncated, and gives no
+// detail of a JSON syntax error where the JavaScript parser names the offset.
+const failurePoint = (detail) => detail.replace(/^(Truncated|Malformed): /, '').replace(/(not valid JSON).*/, '$1');
+
+function sameVoxels(a, b) {
+  return a.count === b.count && Buffer.from(a.coords.buffer).equals(Buffer.from(b.coords.buffer)) &&
+         (a.colors === null ? b.colors === null : b.colors !== null && Buffer.from(a.colors).equals(Buffer.from(b.colors)));
+}
+
+// A deterministic PRNG (xorshift32), so a failure names a case that reproduces.
+function prng(seed) {
+  let s = seed;
+  return (n) => {
+    s ^= s << 13;
+    s ^= s >>> 17;
+    s ^= s << 5;
+    return (s >>> 0) % n;
+  };
+}
+
+describe('hostile tiles', () => {
+  let tile, wasm, reference;
+  // Both decoders on the bytes; they must agree. Returns the JavaScript outcome.
+  const both = (bytes, what) => {
+    const js = outcome((b) => decodePdag(b), bytes, `${what} (JavaScript)`);
+    if (wasm) {
+      if (wasm.broken) assert.fail(`${what}: the WebAssembly decoder aborted earlier`);
+      const w = outcome((b) => wasm.decode(b), bytes, `${what} (WebAssembly)`);
+      assert.equal(js.code, w.code, `${what}: JavaScript says ${js.message ?? 'ok'}, WebAssembly ${w.message ?? 'ok'}`);
+      if (js.code === 'ok') assert.ok(sameVoxels(js.value, w.value), `${what}: the decoders give different voxels`);
+      else assert.equal(failurePoint(js.detail), failurePoint(w.detail), `${what}: the decoders fail at different checks`);
+    }
+    return js;
+  };
+
+  before(async () => {
+    const daemon = await Daemon.start(config.pointdagd);
+    try {
+      const id = await ingest(daemon.url, scan('autzen_trim_pdrf3_rgb.las'), { name: 'autzen' });
+      // The tile of median size: real geometry and VBR colors, small enough to truncate at every length.
+      const tiles = (await listTiles(daemon.url, id)).sort((a, b) => a.voxels - b.voxels);
+      tile = await fetchTile(daemon.url, id, tiles[Math.floor(tiles.length / 2)]);
+    } finally {
+      await daemon.stop();
+    }
+    wasm = await loadWasm();
+    reference = decodePdag(tile);
+  });
+
+  // Without the WebAssembly build, every case below runs the JavaScript decoder alone.
+  test('the WebAssembly decoder takes part', (t) => { if (!wasm) t.skip(WASM_SKIPPED); });
+
+  test('the tile decodes', () => {
+    assert.ok(reference.count > 0 && reference.colors);
+    assert.equal(both(tile, 'the tile').code, 'ok');
+  });
+
+  test('every truncation of the file is Corrupt', () => {
+    for (let n = 0; n < tile.length; ++n) assert.equal(both(tile.subarray(0, n), `first ${n} bytes`).code, 'Corrupt');
+  });
+
+  test('every single-bit flip of the file is caught (CRC32C)', () => {
+    const next = prng(12345);
+    for (let at = 0; at < tile.length; ++at) {
+      const bytes = tile.slice();
+      bytes[at] ^= 1 << next(8);
+      const r = both(bytes, `flip at byte ${at}`);
+      assert.ok(r.code !== 'ok', `flip at byte ${at} decoded`);
+    }
+  });
+
+  // Past the CRCs: the section is damaged and the container re-framed with valid CRCs, so the
+  // damage reaches the metadata, geometry and color decoders themselves.
+  for (const tag of ['meta', 'geometry', 'colors']) {
+    test(`truncated and bit-flipped ${tag} sections with valid CRCs`, (t) => {
+      const sections = sectionsOf(tile);
+      const index = sections.findIndex(([name]) => name === tag);
+      const data = sections[index][1];
+      const reframe = (payload) => framePdag(sections.map(([name, d], i) => [name, i === index ? payload : d]));
+      const counts = { ok: 0 };
+      for (let n = 0; n < data.length; n += Math.max(1, Math.floor(data.length / 1500))) {
+        const r = both(reframe(data.subarray(0, n)), `${tag} cut to ${n} bytes`);
+        counts[r.code] = (counts[r.code] ?? 0) + 1;
+        if (r.code !== 'ok') continue;
+        if (tag === 'colors' && n === 0) {
+          assert.equal(r.value.colors, null, 'an empty colors section is no colors');
+        } else {
+          // The geometry's range coder ends with 5 flush bytes, of which the decoder may not need the
+          // last few (it reads zeros past the end and fails only after more than 4 of them).
+          assert.ok(tag === 'geometry' && n >= data.length - 4, `${tag} cut to ${n} of ${data.length} bytes decoded`);
+          assert.ok(sameVoxels(r.value, reference), `${tag} cut to ${n} bytes decoded to other voxels`);
+        }
+      }
+      const next = prng(777);
+      for (let k = 0; k < 3000; ++k) {
+        const payload = data.slice();
+        const flips = 1 + next(3);
+        for (let f = 0; f < flips; ++f) payload[next(payload.length)] ^= 1 << next(8);
+        const r = both(reframe(payload), `${tag} flip case ${k}`);
+        counts[r.code] = (counts[r.code] ?? 0) + 1;
+      }
+      t.diagnostic(`${tag}: ${JSON.stringify(counts)}`);
+    });
+  }
+
+  const meta = (fields) => utf8(JSON.stringify({ depth: 8, voxel_size: 0.5, origin: [0, 0, 0], ...fields }));
+  // One of the lying files: refused with `code` quickly, and by JavaScript without allocating by the lie.
+  const refused = (bytes, code, what) => {
+    const before = process.memoryUsage().arrayBuffers;
+    assert.equal(both(bytes, what).code, code, what);
+    const grown = process.memoryUsage().arrayBuffers - before;
+    assert.ok(grown < 16 << 20, `${what}: ${grown} bytes of array buffers allocated`);
+  };
+
+  test('headers that lie about counts are refused before allocating', () => {
+    const cube8 = writeGeometry(denseCube(8, 1));
+    refused(framePdag([['meta', meta({ voxels: 2 ** 27 + 1 })], ['geometry', cube8]]), 'ResourceLimit', 'metadata above the voxel limit');
+    refused(framePdag([['meta', meta({ voxels: 2 ** 53 })], ['geometry', cube8]]), 'ResourceLimit', 'metadata declaring 2^53 voxels');
+    // A level table of a full octree (299,593 nodes) over a few bytes of payload.
+    const fullTable = [1, 8, 64, 512, 4096, 32768, 262144];
+    const lying = new Uint8Array([1, 1, 8, 1, ...fullTable.flatMap(varint), 0, 0, 0, 0, 0]);
+    refused(framePdag([['meta', meta({ voxels: 2 ** 27 })], ['geometry', lying]]), 'Corrupt', 'more nodes than the payload can hold');
+    refused(framePdag([['meta', meta({ voxels: 100 })], ['geometry', lying]]), 'Corrupt', 'more nodes than the voxels allow');
+    const huge = new Uint8Array([1, 1, 8, 1, ...varint(1), ...varint(2 ** 40), 0]);
+    refused(framePdag([['meta', meta({ voxels: 2 ** 27 })], ['geometry', huge]]), 'Corrupt', 'a level of 2^40 nodes');
+    // Real DAGs of a few bytes whose counts pass every table check: the root's count is the lie.
+    refused(framePdag([['meta', meta({ voxels: 2 ** 27, depth: 9 })], ['geometry', writeGeometry(denseCube(9, 1))]]),
+            'ResourceLimit', 'a depth-9 solid cube (1.5e8 nodes) in mipmap mode');
+    refused(framePdag([['meta', meta({ voxels: 2 ** 27, depth: 21 })], ['geometry', writeGeometry(denseCube(21, 0))]]),
+            'ResourceLimit', 'a depth-21 solid cube (2^63 voxels)');
+    refused(framePdag([['meta', meta({ voxels: 2 ** 24 })], ['geometry', writeGeometry(denseCube(8, 0))], ['colors', new Uint8Array([0, 1, 2, 3])]]),
+            'Corrupt', 'raw colors for 2^24 voxels in 3 bytes');
+    // Block colors declaring the cube's 19 million node colors over 2 payload bytes.
+    const blockStream = (payload) => new Uint8Array([3, 1, 2, 0, 0, ...varint(19173961), ...varint(19173961), ...varint(payload.length), ...payload]);
+    refused(framePdag([['meta', meta({ voxels: 2 ** 24 })], ['geometry', cube8], ['colors', blockStream([0, 0])]]),
+            'Corrupt', 'block colors for 19 million nodes in 2 bytes');
+    refused(framePdag([['meta', meta({ voxels: 2 ** 24 })], ['geometry', cube8], ['colors', blockStream(new Uint8Array(1500).fill(0x5a))]]),
+            'Corrupt', 'block colors for 19 million nodes in 1500 bytes');
+  });
+
+  test('formats these decoders do not read are Unsupported, not Corrupt', () => {
+    const sections = sectionsOf(tile);
+    const withSection = (tag, change) => framePdag(sections.map(([name, d]) => [name, name === tag ? change(d.slice()) : d]));
+    assert.equal(both(framePdag(sections, { major: 2 }), 'major version 2').code, 'Unsupported');
+    assert.equal(both(withSection('geometry', (g) => { g[1] = 0; return g; }), 'zstd geometry').code, 'Unsupported');
+    for (const codec of [1, 4, 5, 6, 7]) {
+      assert.equal(both(withSection('colors', (c) => { c[0] = codec; return c; }), `colors codec ${codec}`).code, 'Unsupported');
+    }
+    assert.equal(both(withSection('colors', (c) => { c[0] = 8; return c; }), 'colors codec 8').code, 'Corrupt');
+  });
+
+  test('container rules: sections twice, missing, or empty', () => {
+    const [m, g, c] = sectionsOf(tile);
+    assert.equal(both(framePdag([m, g, c, m]), 'meta twice').code, 'Corrupt');
+    assert.equal(both(framePdag([m, c]), 'no geometry').code, 'Corrupt');
+    assert.equal(both(framePdag([g, c]), 'no meta').code, 'Corrupt');
+    // An unknown section is skipped; an empty colors section is no colors.
+    const extra = both(framePdag([m, ['future', utf8('x')], g, c]), 'an unknown section');
+    assert.ok(extra.code === 'ok' && sameVoxels(extra.value, reference));
+    const colorless = both(framePdag([m, g, ['colors', new Uint8Array(0)]]), 'an empty colors section');
+    assert.equal(colorless.code, 'ok');
+    assert.equal(colorless.value.colors, null);
+    assert.deepEqual(colorless.value.coords, reference.coords);
+    for (const [what, fields] of [['voxels 1.0', '"voxels": 1.0'], ['voxels -0', '"voxels": -0'], ['depth "8"', '"depth": "8"']]) {
+      const text = new TextDecoder().decode(m[1]).replace(/"voxels": ?\d+|"depth": ?\d+/, fields);
+      assert.equal(both(framePdag([['meta', utf8(text)], g, c]), `metadata ${what}`).code, 'Corrupt');
+    }
+    const source = JSON.parse(new TextDecoder().decode(m[1]));
+    source.source = 5;
+    assert.equal(both(framePdag([['meta', utf8(JSON.stringify(source))], g, c]), 'metadata source 5').code, 'Corrupt');
+  });
+});

@@ -1,0 +1,111 @@
+// The block color streams "fixed3" and "vbr" (proto/PDAG_FORMAT.md §3), read as
+// codec/pointdag/color/block_decoder.cc BlockColorDecoder::Open reads them, with the same checks in
+// the same order, straight into RGB bytes (DecodeAll's result). The output grows with the blocks
+// really decoded, so a stream that lies about its count fails before it costs memory.
+import { corrupt } from './pdag_error.js';
+import { GAMMA_MODELS, RangeDecoder, bitTreeModels, newModels, unZigZag } from './range_coder.js';
+import { readVarint } from './varint.js';
+
+const STREAM_VERSION = 1;
+const LAYOUT_FIXED = 1;
+const LAYOUT_VARIABLE = 2;
+const FIXED_BITS = 3;
+const MAX_WEIGHT_BITS = 4;
+const MACRO_BLOCK = 16384;
+const LENGTH_BITS = 15;      // bit width of MACRO_BLOCK
+const DIFFERENCE_BITS = 9;   // zigzag of -255..255, plus one
+
+// BlockModels of block_stream.h, flattened.
+const WIDTHS = MAX_WEIGHT_BITS + 1;
+const LENGTH_BASE = 0;
+const WIDTH_BASE = LENGTH_BASE + WIDTHS * GAMMA_MODELS;
+const A_BASE = WIDTH_BASE + WIDTHS * bitTreeModels(3);
+const B_BASE = A_BASE + 3 * GAMMA_MODELS;
+const WEIGHT_BASE = B_BASE + WIDTHS * 3 * GAMMA_MODELS;
+const WEIGHT_TREE = bitTreeModels(MAX_WEIGHT_BITS);
+const MODEL_COUNT = WEIGHT_BASE + WIDTHS * 17 * WEIGHT_TREE;  // 17 previous weights: 16 = first of a block
+
+// `stored`: the stream after the section's codec byte; `expectedCount` from decoded geometry.
+// -> Uint8Array(3 * expectedCount), RGB per color.
+export function decodeBlockColors(stored, expectedCount) {
+  if (stored.length < 4) throw corrupt('color stream is shorter than its header');
+  if (stored[0] !== STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
+  const layout = stored[1];
+  if (layout !== LAYOUT_FIXED && layout !== LAYOUT_VARIABLE) throw corrupt('color stream layout is unknown');
+  const cursor = { pos: 4 };
+  const count = readVarint(stored, cursor);
+  const blocks = count < 0 ? -1 : readVarint(stored, cursor);
+  const payloadSize = blocks < 0 ? -1 : readVarint(stored, cursor);
+  if (payloadSize < 0) throw corrupt('color stream header is cut short');
+  if (payloadSize !== stored.length - cursor.pos) throw corrupt('color stream is not as long as its header says');
+  if (count !== expectedCount) throw corrupt(`color stream holds ${count} colors, expected ${expectedCount}`);
+  if (count > 0xffffffff || blocks > count || (count > 0 && blocks === 0)) throw corrupt('color stream block count is impossible');
+  // No block codes more than a macro block of colors per byte of payload.
+  if (Math.floor(count / MACRO_BLOCK) > payloadSize + 8) {
+    throw corrupt(`color stream declares ${count} colors, more than its ${payloadSize} bytes can hold`);
+  }
+
+  const p = newModels(MODEL_COUNT);
+  const rc = new RangeDecoder(stored, cursor.pos);
+  let out = new Uint8Array(3 * Math.min(count, 4 * MACRO_BLOCK));
+  const palette = new Uint8Array(3 * 16);
+  let next = 0;
+  let prevBits = 0;
+  let pr = 0, pg = 0, pb = 0;
+  for (let k = 0; k < blocks; ++k) {
+    const length = rc.gamma(p, LENGTH_BASE + prevBits * GAMMA_MODELS, LENGTH_BITS);
+    const bits = layout === LAYOUT_VARIABLE ? rc.bitTree(p, WIDTH_BASE + prevBits * 8, 3) : FIXED_BITS;
+    if (bits > MAX_WEIGHT_BITS) throw corrupt('color block has more than 4 bits per weight');
+    if (length === 0 || length > count - next) throw corrupt('color block length is impossible');
+    if (Math.floor(next / MACRO_BLOCK) !== Math.floor((next + length - 1) / MACRO_BLOCK)) throw corrupt('color block crosses a macro block');
+    const ar = pr + unZigZag(rc.gamma(p, A_BASE, DIFFERENCE_BITS));
+    const ag = pg + unZigZag(rc.gamma(p, A_BASE + GAMMA_MODELS, DIFFERENCE_BITS));
+    const ab = pb + unZigZag(rc.gamma(p, A_BASE + 2 * GAMMA_MODELS, DIFFERENCE_BITS));
+    let br = ar, bg = ag, bb = ab;
+    if (bits) {
+      const base = B_BASE + bits * 3 * GAMMA_MODELS;
+      br = ar + unZigZag(rc.gamma(p, base, DIFFERENCE_BITS));
+      bg = ag + unZigZag(rc.gamma(p, base + GAMMA_MODELS, DIFFERENCE_BITS));
+      bb = ab + unZigZag(rc.gamma(p, base + 2 * GAMMA_MODELS, DIFFERENCE_BITS));
+    }
+    if ((ar | ag | ab | br | bg | bb) & ~0xff) throw corrupt('color block endpoint outside 0..255');
+    if (3 * (next + length) > out.length) {
+      const bigger = new Uint8Array(3 * Math.min(count, Math.max(2 * (out.length / 3), next + length)));
+      bigger.set(out);
+      out = bigger;
+    }
+    let o = 3 * next;
+    if (bits === 0) {
+      for (let i = 0; i < length; ++i, o += 3) {
+        out[o] = ar;
+        out[o + 1] = ag;
+        out[o + 2] = ab;
+      }
+    } else {
+      // Every color of the block is one of m + 1 mixes of its endpoints (Interpolate in block_fit.h).
+      const m = (1 << bits) - 1;
+      for (let w = 0; w <= m; ++w) {
+        palette[3 * w] = ((ar * (m - w) + br * w + (m >> 1)) / m) | 0;
+        palette[3 * w + 1] = ((ag * (m - w) + bg * w + (m >> 1)) / m) | 0;
+        palette[3 * w + 2] = ((ab * (m - w) + bb * w + (m >> 1)) / m) | 0;
+      }
+      const wBase = WEIGHT_BASE + bits * 17 * WEIGHT_TREE;
+      let prevW = 16;
+      for (let i = 0; i < length; ++i, o += 3) {
+        const w = rc.bitTree(p, wBase + prevW * WEIGHT_TREE, bits);
+        out[o] = palette[3 * w];
+        out[o + 1] = palette[3 * w + 1];
+        out[o + 2] = palette[3 * w + 2];
+        prevW = w;
+      }
+    }
+    if (rc.overrun()) throw corrupt('color stream is cut short');
+    next += length;
+    prevBits = bits;
+    pr = ar;
+    pg = ag;
+    pb = ab;
+  }
+  if (next !== count) throw corrupt('color blocks do not cover every color');
+  return out;
+}

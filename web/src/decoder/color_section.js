@@ -1,0 +1,36 @@
+// The colors section (proto/PDAG_FORMAT.md §3), dispatched on its first byte as
+// codec/pointdag/color/color_decode.cc DecodeColors does. Raw and the block codecs are read here;
+// lossless (zstd) and the image codecs (png, jpeg, webp, astc) are refused as 'Unsupported'.
+import { decodeBlockColors } from './block_colors.js';
+import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
+
+export const CODEC_RAW = 0;
+export const CODEC_LOSSLESS = 1;
+export const CODEC_FIXED3 = 2;
+export const CODEC_VBR = 3;
+const IMAGE_CODECS = new Set([4, 5, 6, 7]);  // png, jpeg, webp, astc
+const MAX_COLORS = 2 ** 32;
+
+// Why this decoder cannot read a colors section with this codec byte, or null when it can.
+export function unsupportedColorCodec(codec) {
+  if (codec === CODEC_LOSSLESS) return 'lossless (zstd) colors';
+  if (IMAGE_CODECS.has(codec)) return `image-mapped colors (codec ${codec}: png, jpeg, webp or astc)`;
+  return null;
+}
+
+// `count` must come from decoded geometry. -> Uint8Array(3 * count), RGB per color, owned.
+export function decodeColors(section, count) {
+  if (section.length === 0) throw corrupt('colors section is empty');
+  if (count === 0) throw corrupt('a colors section for no voxels');
+  if (count > MAX_COLORS) throw resourceLimit(`${count} colors are more than a colors section may hold`);
+  const codec = section[0];
+  const payload = section.subarray(1);
+  if (codec === CODEC_RAW) {
+    if (payload.length !== 3 * count) throw corrupt('raw colors do not hold one RGB per voxel');
+    return payload.slice();
+  }
+  if (codec === CODEC_FIXED3 || codec === CODEC_VBR) return decodeBlockColors(payload, count);
+  const why = unsupportedColorCodec(codec);
+  if (why) throw unsupported(`${why} are not read by this decoder`);
+  throw corrupt(`colors section names unknown codec ${codec}`);
+}

@@ -1,0 +1,203 @@
+// The stored SVDAG (proto/PDAG_FORMAT.md §2.2), read as codec/pointdag/dag/dag_stream.cc DecodeDag
+// reads it, with the same checks in the same order, into flat typed arrays:
+//   masks[L]      Uint8Array, the child mask of each node of internal level L (canonical order)
+//   firstChild[L] Uint32Array(n+1), where node i's children start in children[L]
+//   children[L]   Uint32Array, child ordinals on level L+1 (brick indices below the last level)
+//   brickLo/Hi    Uint32Array, the 64-bit brick masks (cells 0-3 in Lo, 4-7 in Hi)
+// plus each node's count (§2.3: voxels in leaf mode, nodes and voxels in mipmap mode) and its
+// voxel count, bottom-up, as doubles (exact far beyond any limit they are compared with).
+import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
+import { GAMMA_MODELS, RangeDecoder, bitWidth, newModels } from './range_coder.js';
+import { readVarint } from './varint.js';
+
+export const MAX_DEPTH = 21;
+export const COUNT_LEAVES = 0;
+export const COUNT_MIPMAP = 1;
+
+const STREAM_VERSION = 1;
+const CODER_ZSTD = 0;
+// A coded bit costs at least 0.0014 bits and a node one 8-bit mask: a byte holds < 720 nodes.
+const MAX_CONTEXT_NODES_PER_BYTE = 720;
+
+// Context classes: internal nodes by height (3..21), brick cell masks (2), brick voxel masks (1).
+const VOXEL_CLASS = 1;
+const BRICK_CELL_CLASS = 2;
+const CLASSES = MAX_DEPTH + 1;
+const MASK_BASE = 0;
+const FLAG_BASE = CLASSES * 256;
+const REF_BASE = FLAG_BASE + CLASSES;
+const MODEL_COUNT = REF_BASE + CLASSES * GAMMA_MODELS;
+
+export const popcount32 = (v) => {
+  v -= (v >>> 1) & 0x55555555;
+  v = (v & 0x33333333) + ((v >>> 2) & 0x33333333);
+  return (Math.imul((v + (v >>> 4)) & 0x0f0f0f0f, 0x01010101) >>> 24);
+};
+const POPCOUNT8 = Uint8Array.from({ length: 256 }, (_, i) => popcount32(i));
+
+// Mipmap count of a brick: itself, its occupied 2x2x2 cells, its voxels.
+function brickMipCount(lo, hi) {
+  let cells = 0;
+  for (let c = 0; c < 4; ++c) cells += ((lo >>> (8 * c)) & 0xff ? 1 : 0) + ((hi >>> (8 * c)) & 0xff ? 1 : 0);
+  return 1 + cells + popcount32(lo) + popcount32(hi);
+}
+
+class GrowableU32 {
+  constructor(capacity) {
+    this.a = new Uint32Array(Math.max(16, capacity));
+    this.n = 0;
+  }
+  push(v) {
+    if (this.n === this.a.length) {
+      const bigger = new Uint32Array(2 * this.a.length);
+      bigger.set(this.a);
+      this.a = bigger;
+    }
+    this.a[this.n++] = v;
+  }
+  done() {
+    return this.a.subarray(0, this.n);
+  }
+}
+
+function readSymbols(rc, depth, mode, counts) {
+  const levels = depth - 2;
+  const p = newModels(MODEL_COUNT);
+  const masks = [];
+  const firstChild = [];
+  const children = [];
+  for (let level = 0; level < levels; ++level) {
+    const cls = depth - level;
+    const n = counts[level];
+    const levelMasks = new Uint8Array(n);
+    const first = new Uint32Array(n + 1);
+    const kids = new GrowableU32(Math.min(8 * n, 2 * counts[level + 1]));
+    const maskBase = MASK_BASE + cls * 256;
+    const flagModel = FLAG_BASE + cls;
+    const refBase = REF_BASE + cls * GAMMA_MODELS;
+    const nextCount = counts[level + 1];
+    let seen = 0;
+    for (let i = 0; i < n; ++i) {
+      const mask = rc.bitTree(p, maskBase, 8);
+      if (mask === 0 || rc.overrun()) throw corrupt('geometry stream holds an empty or missing node mask');
+      levelMasks[i] = mask;
+      first[i] = kids.n;
+      for (let c = POPCOUNT8[mask]; c > 0; --c) {
+        let k;
+        if (seen > 0 && rc.bit(p, flagModel)) {
+          k = rc.gamma(p, refBase, bitWidth(seen)) - 1;
+          if (k >= seen) throw corrupt('geometry stream refers to a node not yet seen');
+        } else {
+          k = seen++;
+          if (seen > nextCount) throw corrupt('geometry stream holds more nodes than its header declares');
+        }
+        kids.push(k);
+      }
+    }
+    first[n] = kids.n;
+    if (seen !== nextCount) throw corrupt('geometry stream holds fewer nodes than its header declares');
+    masks.push(levelMasks);
+    firstChild.push(first);
+    children.push(kids.done());
+  }
+  const bricks = counts[levels];
+  const brickLo = new Uint32Array(bricks);
+  const brickHi = new Uint32Array(bricks);
+  const cellBase = MASK_BASE + BRICK_CELL_CLASS * 256;
+  const voxelBase = MASK_BASE + VOXEL_CLASS * 256;
+  for (let i = 0; i < bricks; ++i) {
+    const cells = rc.bitTree(p, cellBase, 8);
+    if (cells === 0) throw corrupt('geometry stream holds an empty brick');
+    let lo = 0;
+    let hi = 0;
+    for (let c = 0; c < 8; ++c) {
+      if (!((cells >> c) & 1)) continue;
+      const voxels = rc.bitTree(p, voxelBase, 8);
+      if (voxels === 0) throw corrupt('geometry stream holds an empty brick cell');
+      if (c < 4) lo |= voxels << (8 * c);
+      else hi |= voxels << (8 * (c - 4));
+    }
+    brickLo[i] = lo;
+    brickHi[i] = hi;
+  }
+  if (rc.overrun()) throw corrupt('geometry stream ends early');
+  return { depth, mode, levels, masks, firstChild, children, brickLo, brickHi };
+}
+
+// Counts bottom-up: count[L][i] by the mode, voxels[L][i] the voxels below node i.
+function addCounts(dag) {
+  const { levels, mode, brickLo, brickHi } = dag;
+  const mip = mode === COUNT_MIPMAP;
+  const brickCount = new Float64Array(brickLo.length);
+  const brickVoxels = new Float64Array(brickLo.length);
+  for (let i = 0; i < brickLo.length; ++i) {
+    brickVoxels[i] = popcount32(brickLo[i]) + popcount32(brickHi[i]);
+    brickCount[i] = mip ? brickMipCount(brickLo[i], brickHi[i]) : brickVoxels[i];
+  }
+  dag.count = new Array(levels);
+  dag.voxels = new Array(levels);
+  let belowCount = brickCount;
+  let belowVoxels = brickVoxels;
+  for (let level = levels - 1; level >= 0; --level) {
+    const first = dag.firstChild[level];
+    const kids = dag.children[level];
+    const n = dag.masks[level].length;
+    const count = new Float64Array(n);
+    const voxels = new Float64Array(n);
+    for (let i = 0; i < n; ++i) {
+      let sum = mip ? 1 : 0;
+      let v = 0;
+      for (let c = first[i]; c < first[i + 1]; ++c) {
+        sum += belowCount[kids[c]];
+        v += belowVoxels[kids[c]];
+      }
+      count[i] = sum;
+      voxels[i] = v;
+    }
+    dag.count[level] = count;
+    dag.voxels[level] = voxels;
+    belowCount = count;
+    belowVoxels = voxels;
+  }
+  dag.rootCount = belowCount[0];
+  dag.rootVoxels = belowVoxels[0];
+  // The limits of the resident C++ DAG: 32-bit node words, and 32-bit counts on the levels with
+  // depth - level >= 8 (the root's count is the largest).
+  let words = 0;
+  for (let level = 0; level < levels; ++level) words += dag.masks[level].length + dag.children[level].length;
+  if (words > 0xffffffff) throw resourceLimit('decoded DAG exceeds 2^32 node words');
+  if (dag.depth >= 8 && dag.rootCount > 0xffffffff) throw resourceLimit('decoded DAG holds more than 2^32 voxels');
+}
+
+// `maxNodes` bounds what a lying level table may make the decoder allocate (nodes + bricks).
+export function decodeDag(bytes, maxNodes) {
+  if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
+  if (bytes[0] !== STREAM_VERSION) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
+  if (bytes[1] > 1) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
+  const depth = bytes[2];
+  if (depth < 2 || depth > MAX_DEPTH) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);
+  if (bytes[3] > 1) throw corrupt(`geometry stream names unknown count mode ${bytes[3]}`);
+  const mode = bytes[3];
+
+  const cursor = { pos: 4 };
+  const counts = new Array(depth - 1);
+  let total = 0;
+  for (let level = 0; level < counts.length; ++level) {
+    const c = readVarint(bytes, cursor);
+    if (c < 0) throw corrupt('geometry stream ends inside its level table');
+    if (c === 0 || c > maxNodes - total) throw corrupt('geometry stream declares more nodes than its voxels allow');
+    // A node has at most 8 children: a level holds at most 8 times the nodes of the one above.
+    if (level > 0 && c > 8 * counts[level - 1]) throw corrupt('geometry stream declares an impossible node count');
+    counts[level] = c;
+    total += c;
+  }
+  if (counts[0] !== 1) throw corrupt('geometry stream must have exactly one root');
+  if (bytes[1] === CODER_ZSTD) throw unsupported('the geometry stream is zstd-coded; this decoder reads the context coder only');
+  const payload = bytes.length - cursor.pos + 8;  // + the zero bytes the decoder may read past the end
+  if (total > payload * MAX_CONTEXT_NODES_PER_BYTE) {
+    throw corrupt(`geometry stream declares ${total} nodes, more than its ${bytes.length - cursor.pos} bytes can hold`);
+  }
+  const dag = readSymbols(new RangeDecoder(bytes, cursor.pos), depth, mode, counts);
+  addCounts(dag);
+  return dag;
+}

@@ -1,0 +1,17 @@
+// Stand-ins for the image-mapped color decoders in the WebAssembly build (OpenImageIO and astcenc
+// are not built for emscripten). decode_tile_wasm.cc refuses png, jpeg, webp and astc colors before
+// decoding, so these only keep the real DecodeColors (color/color_decode.cc) linkable.
+#include "pointdag/color/astc_mapping.h"
+#include "pointdag/color/image_mapping.h"
+
+namespace pointdag {
+
+StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t>, uint64_t) {
+  return Unsupported("png, jpeg and webp colors are not in the WebAssembly build");
+}
+
+StatusOr<std::vector<Rgb8>> DecodeColorAstc(std::span<const uint8_t>, uint64_t) {
+  return Unsupported("astc colors are not in the WebAssembly build");
+}
+
+}  // namespace pointdag
