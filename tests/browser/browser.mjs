@@ -1,8 +1,11 @@
 // Chromium for the browser tests: Debian's /usr/bin/chromium (POINTDAG_CHROMIUM overrides), driven
-// by playwright-core from web/node_modules, headless with software WebGL (SwiftShader). Missing
-// pieces fail the tests with what to run; they never skip.
+// by playwright-core from web/node_modules, headless with software WebGL (SwiftShader), against the
+// real pointdagd of tests/web/lib/pointdagd.mjs. Missing pieces fail the tests with what to run;
+// they never skip.
 import { existsSync } from 'node:fs';
 import { createRequire } from 'node:module';
+import { config } from '../web/lib/config.mjs';
+import { Daemon } from '../web/lib/pointdagd.mjs';
 
 const webPackage = new URL('../../web/package.json', import.meta.url);
 
@@ -40,4 +43,25 @@ export async function newPage(browser) {
   page.on('pageerror', (err) => page.errors.push(err.message));
   page.on('console', (msg) => { if (msg.type() === 'error') page.errors.push(msg.text()); });
   return page;
+}
+
+// What each browser test file starts in before() and ends in after(): a pointdagd serving the viewer
+// (one ingest worker), Chromium and one page. close() is safe after a start that failed half-way.
+export async function openSession({ token = null } = {}) {
+  const session = {
+    daemon: null, browser: null, page: null,
+    async close() {
+      if (session.browser) await session.browser.close();
+      if (session.daemon) await session.daemon.stop();
+    },
+  };
+  try {
+    session.daemon = await Daemon.start({ token, webDir: config.webDir, workers: 1, startSeconds: 30 });
+    session.browser = await launchChromium();
+    session.page = await newPage(session.browser);
+  } catch (err) {
+    await session.close();
+    throw err;
+  }
+  return session;
 }

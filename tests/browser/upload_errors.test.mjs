@@ -5,26 +5,23 @@ import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, test } from 'node:test';
-import { launchChromium, newPage } from './browser.mjs';
-import { Daemon } from './daemon.mjs';
-import { scanPath } from './scans.mjs';
+import { scan } from '../web/lib/config.mjs';
+import { openSession } from './browser.mjs';
 
 const TOKEN = 'browser-test-write-token';
+let session;
 let daemon;
-let browser;
 let page;
 let dir;
 
 before(async () => {
   dir = mkdtempSync(join(tmpdir(), 'pointdag-refusals-'));
-  daemon = await Daemon.start({ token: TOKEN });
-  browser = await launchChromium();
-  page = await newPage(browser);
+  session = await openSession({ token: TOKEN });
+  ({ daemon, page } = session);
 });
 
 after(async () => {
-  if (browser) await browser.close();
-  if (daemon) await daemon.stop();
+  if (session) await session.close();
   if (dir) rmSync(dir, { recursive: true, force: true });
 });
 
@@ -48,7 +45,7 @@ async function uploadThroughPage(file, token) {
   return error.textContent();
 }
 
-const tiny = scanPath('tiny_1.2-with-color_1065pts.las');
+const tiny = scan('tiny_1.2-with-color_1065pts.las');
 const cases = [
   { what: 'a wrong token', status: 401, token: 'not-the-token', file: () => tiny },
   { what: 'a text file', status: 415, token: TOKEN, file: () => {

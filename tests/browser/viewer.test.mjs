@@ -2,36 +2,33 @@
 // follow its job to a link, then see the dataset drawn from our .pdag tiles and from its 3D Tiles.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { launchChromium, newPage } from './browser.mjs';
-import { Daemon } from './daemon.mjs';
+import { scan } from '../web/lib/config.mjs';
+import { openSession } from './browser.mjs';
 import { checkDrawn } from './drawn_check.mjs';
-import { scanPath } from './scans.mjs';
 import { intersectionOverUnion } from './screenshot_check.mjs';
 
 const TOKEN = 'browser-test-write-token';
 const NAME = 'autzen-browser';
+let session;
 let daemon;
-let browser;
 let page;
 let datasetPath = null;
 let pdagDrawn = null; // what the .pdag page showed, for the 3D Tiles page to match
 
 before(async () => {
-  daemon = await Daemon.start({ token: TOKEN });
-  browser = await launchChromium();
-  page = await newPage(browser);
+  session = await openSession({ token: TOKEN });
+  ({ daemon, page } = session);
 });
 
 after(async () => {
-  if (browser) await browser.close();
-  if (daemon) await daemon.stop();
+  if (session) await session.close();
 });
 
 test('a scan uploaded on the home page, with the token, becomes a linked dataset', async () => {
   await page.goto(`${daemon.url}/`);
   await page.locator('#token').fill(TOKEN);
   await page.locator('#token').blur();
-  await page.locator('#file').setInputFiles(scanPath('autzen_trim_pdrf3_rgb.las'));
+  await page.locator('#file').setInputFiles(scan('autzen_trim_pdrf3_rgb.las'));
   await page.locator('#name').fill(NAME);
   await page.locator('#upload').click();
   const link = page.locator('#dataset-link');

@@ -61,7 +61,7 @@ describe('tiles decoded in JavaScript and WebAssembly equal pointdag decode', ()
   before(async () => {
     requireFile(config.cli, 'the pointdag CLI (build it: scripts/build)');
     SCANS.forEach(scan);
-    daemon = await Daemon.start(config.pointdagd);
+    daemon = await Daemon.start();
     wasm = await loadWasm();
     scratch = mkdtempSync(join(tmpdir(), 'pointdag-web-decode-'));
   });

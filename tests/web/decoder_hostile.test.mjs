@@ -65,7 +65,7 @@ describe('hostile tiles', () => {
   };
 
   before(async () => {
-    const daemon = await Daemon.start(config.pointdagd);
+    const daemon = await Daemon.start();
     try {
       const id = await ingest(daemon.url, scan('autzen_trim_pdrf3_rgb.las'), { name: 'autzen' });
       // The tile of median size: real geometry and VBR colors, small enough to truncate at every length.

@@ -32,7 +32,7 @@ async function tilesOf() {
     return { name: args.dataset, bytes: await Promise.all(tiles.map((t) => fetchTile(args.daemon, args.dataset, t))) };
   }
   if (!args.scan) throw new Error('give --daemon URL --dataset ID, or --scan FILE');
-  const daemon = await Daemon.start(args.pointdagd);
+  const daemon = await Daemon.start({ binary: args.pointdagd });
   try {
     const id = await ingest(daemon.url, args.scan, { name: basename(args.scan) });
     const tiles = await listTiles(daemon.url, id);

@@ -31,7 +31,7 @@ async function tiles() {
     return Promise.all((await listTiles(args.daemon, args.dataset)).map((t) => fetchTile(args.daemon, args.dataset, t)));
   }
   if (!args.scan) throw new Error('give --daemon URL --dataset ID, or --scan FILE');
-  const daemon = await Daemon.start(args.pointdagd);
+  const daemon = await Daemon.start({ binary: args.pointdagd });
   try {
     const id = await ingest(daemon.url, args.scan, { name: basename(args.scan) });
     return await Promise.all((await listTiles(daemon.url, id)).map((t) => fetchTile(daemon.url, id, t)));

@@ -1,6 +1,6 @@
-// Where the web tests find the built binaries and the real scans: environment variables (set by
-// tests/web/CMakeLists.txt for ctest), else the places a checkout builds them. A missing file is a
-// failure with a message, never a silent skip.
+// Where the web and browser tests find the built binaries, the viewer and the real scans:
+// environment variables (set for ctest by tests/web/ and tests/browser/CMakeLists.txt), else the
+// places a checkout builds them. A missing file is a failure with a message, never a silent skip.
 import { existsSync } from 'node:fs';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -12,6 +12,8 @@ export const config = {
   pointdagd: process.env.POINTDAGD || join(root, 'build/server/pointdagd'),
   cli: process.env.POINTDAG_CLI || join(root, 'build/tools/pointdag'),
   dataDir: process.env.POINTDAG_DATA_DIR || join(root, '../shared/data'),
+  // The viewer bundled by web/build.mjs, which the browser tests have pointdagd serve.
+  webDir: process.env.POINTDAG_WEB_DIR || join(root, 'build/web'),
   // Empty when CMake found no em++ (the WebAssembly decoder was not built).
   wasmDecoder: process.env.POINTDAG_WASM_DECODER ?? join(root, 'build/web-wasm/pdag_decoder.mjs'),
 };

@@ -1,30 +1,38 @@
-// A real pointdagd on loopback for the web tests and benchmarks (as tests/server/daemon_util.cc
-// starts one): a temporary --data-dir, port 0 with --port-file, no token (loopback only).
+// A real pointdagd on loopback for the web and browser tests and the benchmarks (as
+// tests/server/daemon_util.cc starts one): a temporary --data-dir, port 0 with --port-file, ready
+// once /readyz answers; optionally a write token, the viewer's files (--web-dir) and --workers.
 // Also: upload a scan, wait for its job, and list and fetch every tile of a dataset.
 import { spawn } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { setTimeout as sleep } from 'node:timers/promises';
+import { config } from './config.mjs';
 
 export class Daemon {
-  static async start(pointdagd, { startSeconds = 120 } = {}) {
-    if (!pointdagd || !existsSync(pointdagd)) throw new Error(`pointdagd not found at '${pointdagd}' (build it: scripts/build)`);
-    const dir = mkdtempSync(join(tmpdir(), 'pointdag-web-'));
-    const portFile = join(dir, 'port');
-    const proc = spawn(pointdagd, ['--listen', '127.0.0.1:0', '--data-dir', join(dir, 'var'), '--port-file', portFile],
-                       { stdio: ['ignore', 'pipe', 'pipe'] });
-    const daemon = new Daemon(proc, dir);
-    const deadline = Date.now() + startSeconds * 1000;
-    while (!existsSync(portFile) || readFileSync(portFile, 'utf8').trim() === '') {
-      if (daemon.exited) throw new Error(`pointdagd exited during start (${daemon.exited}):\n${daemon.log}`);
-      if (Date.now() > deadline) {
-        await daemon.stop();
-        throw new Error(`pointdagd did not start within ${startSeconds} s:\n${daemon.log}`);
-      }
-      await sleep(25);
+  // binary: POINTDAGD (set by ctest), else build/server/pointdagd. webDir: serve the viewer from it.
+  static async start({ binary = config.pointdagd, token = null, webDir = null, workers = null, startSeconds = 120 } = {}) {
+    if (!binary || !existsSync(binary)) throw new Error(`pointdagd not found at '${binary}' (build it: scripts/build; ctest sets POINTDAGD)`);
+    if (webDir && !existsSync(join(webDir, 'index.html'))) {
+      throw new Error(`${webDir}/index.html is missing: build the web target (POINTDAG_WEB_DIR names the folder)`);
     }
-    daemon.url = `http://127.0.0.1:${Number(readFileSync(portFile, 'utf8'))}`;
+    const dir = mkdtempSync(join(tmpdir(), 'pointdagd-'));
+    const portFile = join(dir, 'port');
+    const args = ['--listen', '127.0.0.1:0', '--data-dir', join(dir, 'var'), '--port-file', portFile];
+    if (webDir) args.push('--web-dir', webDir);
+    if (workers) args.push('--workers', String(workers));
+    // Only the token asked for: one inherited from the caller's shell would refuse the tests' uploads.
+    const env = { ...process.env };
+    delete env.POINTDAGD_TOKEN;
+    delete env.POINTDAGD_READ_TOKEN;
+    if (token) env.POINTDAGD_TOKEN = token;
+    const daemon = new Daemon(spawn(binary, args, { env, stdio: ['ignore', 'pipe', 'pipe'] }), dir);
+    try {
+      await daemon.waitReady(portFile, startSeconds);
+    } catch (err) {
+      await daemon.stop();
+      throw err;
+    }
     return daemon;
   }
 
@@ -33,6 +41,7 @@ export class Daemon {
     this.dir = dir;
     this.log = '';
     this.exited = null;
+    this.url = null;
     for (const stream of [proc.stdout, proc.stderr]) stream.on('data', (d) => { this.log += d; });
     this.done = new Promise((resolve) => proc.on('exit', (code, signal) => {
       this.exited = signal ?? `status ${code}`;
@@ -40,10 +49,33 @@ export class Daemon {
     }));
   }
 
+  // Ready is /readyz answering 200, not just the port file: the daemon binds before it is ready.
+  async waitReady(portFile, startSeconds) {
+    const deadline = Date.now() + startSeconds * 1000;
+    while (Date.now() < deadline) {
+      if (this.exited) throw new Error(`pointdagd exited during start (${this.exited}):\n${this.log}`);
+      if (!this.url && existsSync(portFile)) {
+        const port = readFileSync(portFile, 'utf8').trim();
+        if (port) this.url = `http://127.0.0.1:${Number(port)}`;
+      }
+      if (this.url) {
+        try {
+          if ((await fetch(`${this.url}/readyz`)).ok) return;
+        } catch {
+          // not listening yet
+        }
+      }
+      await sleep(25);
+    }
+    throw new Error(`pointdagd was not ready within ${startSeconds} s:\n${this.log}`);
+  }
+
+  // SIGTERM, then SIGKILL if it has not exited after 10 s, so that a hung daemon cannot hang the test.
   async stop() {
     if (!this.exited) {
       this.proc.kill('SIGTERM');
-      await this.done;
+      await Promise.race([this.done, sleep(10_000)]);
+      if (!this.exited) this.proc.kill('SIGKILL');
     }
     rmSync(this.dir, { recursive: true, force: true });
   }

@@ -8,6 +8,7 @@ import { LodSelector } from './lod_selector.js';
 import { PointMaterials } from './point_materials.js';
 import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
+import { statRows } from './stat_rows.js';
 import { TileCache } from './tile_cache.js';
 import { TileHierarchy } from './tile_hierarchy.js';
 import { TileLoader } from './tile_loader.js';
@@ -128,16 +129,9 @@ export class PdagViewer {
 
   statRows() {
     const s = this.state();
-    return [
-      ['Tiles on screen', formatInt(s.tilesOnScreen)],
-      ['Points on screen', formatInt(s.pointsOnScreen)],
-      ['Levels drawn', s.levelsDrawn.join(', ') || '–'],
-      ['Frame', `${this.view.frameMs.toFixed(1)} ms`],
-      ['Loading', s.loading],
-      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles`],
+    return statRows(s, this.view.frameMs, `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles`, [
       ['Resident', `${formatInt(s.residentPoints)} / ${formatInt(s.budgetPoints)} points`],
       ['Decode', s.decoder.tiles ? `${(s.decoder.ms / s.decoder.tiles).toFixed(1)} ms/tile (${s.decoder.backend})` : '–'],
-      ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
-    ];
+    ]);
   }
 }

@@ -6,11 +6,12 @@ import * as THREE from 'three';
 import { TilesRenderer } from '3d-tiles-renderer';
 import { GLTFExtensionsPlugin } from '3d-tiles-renderer/plugins';
 import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
-import { formatBytes, formatInt } from '../app/format.js';
+import { formatBytes } from '../app/format.js';
 import { ByteCounterPlugin } from './byte_counter_plugin.js';
 import { worldPointSize } from './point_materials.js';
 import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
+import { statRows } from './stat_rows.js';
 
 const LEVEL_OF_URL = /(?:^|\/)(\d+)\/\d+\/\d+\/\d+\.glb(?:\?|$)/; // tiles are L/X/Y/Z.glb
 
@@ -142,14 +143,7 @@ export class Tiles3dViewer {
 
   statRows() {
     const s = this.state();
-    return [
-      ['Tiles on screen', formatInt(s.tilesOnScreen)],
-      ['Points on screen', formatInt(s.pointsOnScreen)],
-      ['Levels drawn', s.levelsDrawn.join(', ') || '–'],
-      ['Frame', `${this.view.frameMs.toFixed(1)} ms`],
-      ['Loading', s.loading],
-      ['Fetched', `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles (+ ${formatBytes(s.tilesetBytes)} tileset.json)`],
-      ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
-    ];
+    return statRows(s, this.view.frameMs,
+      `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles (+ ${formatBytes(s.tilesetBytes)} tileset.json)`);
   }
 }
