@@ -81,3 +81,48 @@ test('the 3D Tiles page draws the same scan with 3d-tiles-renderer', async (t) =
   assert.ok(iou >= 0.9, `the 3D Tiles page drew the scan at ${JSON.stringify(drawn.fg.box)}, the .pdag page at ${JSON.stringify(pdagDrawn.fg.box)}`);
   assert.deepEqual(page.errors, []);
 });
+
+test('the dataset page keeps its budget of resident points, unloading what the view left', async (t) => {
+  assert.ok(datasetPath, 'the upload test made no dataset');
+  // Below what Autzen's full view wants (its finest level alone is ~99k voxels, root and level 1
+  // together ~66k): the fitted view stays at level 0, a zoom into one end refines there.
+  const budget = 60_000;
+  await page.goto(`${daemon.url}${datasetPath}?budget=${budget}`);
+  const settled = async () => {
+    await page.waitForTimeout(300); // the wheel's or the button's frame is drawn
+    await page.waitForFunction(() => window.pointdagViewer?.state().finestVisibleLevelDrawn, null, { timeout: 60_000, polling: 100 });
+    return page.evaluate(() => window.pointdagViewer.state());
+  };
+  const box = await page.locator('canvas').boundingBox();
+  // Zoom in with the wheel over a point of the scan (clear of the HUD, which takes the wheel there).
+  const zoomInAt = async (fx, fy, steps) => {
+    await page.mouse.move(box.x + box.width * fx, box.y + box.height * fy);
+    for (let i = 0; i < steps; ++i) await page.mouse.wheel(0, -300);
+    return settled();
+  };
+  const fit = async () => {
+    await page.locator('#fit').click();
+    return settled();
+  };
+  const states = { fitted: await settled() };
+  assert.equal(states.fitted.budgetPoints, budget);
+  states.zoomedEast = await zoomInAt(0.8, 0.48, 20);
+  states.refitted = await fit();
+  states.zoomedWest = await zoomInAt(0.3, 0.78, 12);
+  const s = states;
+  t.diagnostic(Object.entries(s).map(([k, v]) => `${k}: levels ${v.levelsDrawn.join(',')}, ${v.pointsOnScreen} on screen, ` +
+    `${v.residentPoints} resident`).join('; ') + `; ${s.zoomedWest.decoder.voxels} decoded in all, ${s.zoomedWest.evictedTiles} tiles evicted`);
+  for (const [k, v] of Object.entries(s)) {
+    assert.ok(v.residentPoints <= budget, `${k}: resident ${v.residentPoints} > budget ${budget}`);
+    assert.ok(v.pointsOnScreen > 0, `${k}: nothing drawn`);
+  }
+  // The zooms refined past the coarse view as far as the budget allows.
+  assert.deepEqual(s.fitted.levelsDrawn, [0]);
+  for (const k of ['zoomedEast', 'zoomedWest']) {
+    assert.ok(Math.min(...s[k].levelsDrawn) > 0, `${k}: still drawing levels ${s[k].levelsDrawn}`);
+  }
+  // More was decoded than the budget holds, and resident stayed within it: tiles were unloaded.
+  assert.ok(s.zoomedWest.decoder.voxels > budget, `decoded only ${s.zoomedWest.decoder.voxels} voxels: the zooms loaded nothing new`);
+  assert.ok(s.zoomedWest.evictedTiles > 0);
+  assert.deepEqual(page.errors, []);
+});

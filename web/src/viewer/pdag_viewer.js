@@ -87,16 +87,17 @@ export class PdagViewer {
   update() {
     if (!this.hierarchy.root) return; // start() has not read the root page yet
     const frame = ++this.frame;
-    const sel = this.selector.select(this.view.camera, this.view.heightPx(), frame);
+    const sel = this.selector.select(this.view.camera, this.view.heightPx(), frame, this.cache.budget);
     for (const node of this.drawn) if (node.points) node.points.visible = false;
     for (const node of sel.draw) node.points.visible = true;
     this.drawn = sel.draw;
-    this.loader.schedule(sel.wanted, (points) => this.cache.pointsUsedIn(frame) + points <= this.cache.budget);
+    this.loader.schedule(sel.wanted, (points) => this.cache.makeRoom(points, frame));
     this.cache.trim(frame);
     const now = performance.now();
     if (this.firstFrameMs === null && sel.draw.length) this.firstFrameMs = now;
-    // Finest visible level drawn: nothing more to fetch for this view (or nothing the budget allows).
-    // (A wanted tile the budget refused is neither in flight nor queued.)
+    // Finest visible level drawn: nothing more to fetch for this view (or nothing the budget allows:
+    // the selector plans only what fits, and a tile the loader could not make room for is neither
+    // in flight nor queued).
     this.complete = sel.covered && !sel.pagesWanted && this.loader.inFlight === 0 &&
       this.loader.queued === 0 && sel.draw.length > 0;
     if (this.complete && this.finestMs === null) this.finestMs = now;
@@ -116,6 +117,7 @@ export class PdagViewer {
       tilesFetched: this.loader.loaded,
       hierarchyPages: this.hierarchy.pagesRead,
       residentPoints: this.cache.points,
+      evictedTiles: this.cache.evicted,
       budgetPoints: this.cache.budget,
       decoder: { backend: this.pool.backendUsed, tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
       errors: this.loader.failures,

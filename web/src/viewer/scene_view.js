@@ -21,6 +21,7 @@ export class SceneView {
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.screenSpacePanning = true;
+    this.controls.zoomToCursor = true; // the wheel zooms into the part of the data under the mouse
     this.controls.addEventListener('change', () => this.requestRender());
     this.radius = 1;
     this.onFrame = () => {};

@@ -1,11 +1,14 @@
-// The tiles resident on the GPU, within a budget of points: what the last frames did not use goes
-// first, least recently used first (tiles that fell out of view, or were replaced by finer ones).
+// The tiles resident on the GPU, within a budget of points. Tiles the current plan does not keep
+// (node.keep, set by LodSelector) stay cached while the budget has room; when a load needs room,
+// they go first, least recently in view first, finest first among equals (tiles that fell out of
+// view, were replaced by finer ones, or belong to a refinement the budget gave up).
 export class TileCache {
   constructor(scene, budgetPoints) {
     this.scene = scene;
     this.budget = budgetPoints;
     this.tiles = new Set();
     this.points = 0;
+    this.evicted = 0;
   }
 
   add(node, points) {
@@ -15,21 +18,22 @@ export class TileCache {
     this.points += node.voxels;
   }
 
-  // Points of the tiles the frame `frame` used: what must stay resident.
-  pointsUsedIn(frame) {
-    let n = 0;
-    for (const node of this.tiles) if (node.lastUsed === frame) n += node.voxels;
-    return n;
-  }
-
-  // Evicts tiles the current frame does not use until the budget holds.
-  trim(frame) {
-    if (this.points <= this.budget) return;
-    const unused = [...this.tiles].filter((n) => n.lastUsed < frame).sort((a, b) => a.lastUsed - b.lastUsed);
-    for (const node of unused) {
-      if (this.points <= this.budget) break;
+  // Evicts tiles the plan of frame `frame` does not keep until `points` more fit the budget;
+  // true when they do.
+  makeRoom(points, frame) {
+    if (this.points + points <= this.budget) return true;
+    const unkept = [...this.tiles].filter((n) => n.keep !== frame)
+      .sort((a, b) => a.lastUsed - b.lastUsed || b.level - a.level);
+    for (const node of unkept) {
+      if (this.points + points <= this.budget) break;
       this.evict(node);
     }
+    return this.points + points <= this.budget;
+  }
+
+  // Back within the budget (a tile arrived for a plan that changed meanwhile).
+  trim(frame) {
+    this.makeRoom(0, frame);
   }
 
   evict(node) {
@@ -37,6 +41,7 @@ export class TileCache {
     node.points.geometry.dispose();
     this.tiles.delete(node);
     this.points -= node.voxels;
+    this.evicted++;
     node.unload();
   }
 }

@@ -15,15 +15,16 @@ export class TileLoader {
     this.lastError = null;
   }
 
-  // wanted: [{node, distance}] of tiles the frame needs and lacks; canAfford(voxels) is the budget.
-  schedule(wanted, canAfford) {
+  // wanted: [{node, distance}] of tiles the frame needs and lacks; makeRoom(voxels) frees room in
+  // the budget for that many more points (evicting what the frame does not keep), true if it could.
+  schedule(wanted, makeRoom) {
     wanted.sort((a, b) => a.node.level - b.node.level || a.distance - b.distance);
     this.queue = wanted.map((w) => w.node);
     this.blockedByBudget = 0;
     while (this.inFlight < this.maxInFlight && this.queue.length) {
       const node = this.queue.shift();
       // The root always loads: without it nothing can be drawn.
-      if (node.level > 0 && !canAfford(node.voxels + this.inFlightPoints)) {
+      if (!makeRoom(node.voxels + this.inFlightPoints) && node.level > 0) {
         this.blockedByBudget++;
         continue;
       }
