@@ -88,10 +88,19 @@ test('the dataset page keeps its budget of resident points, unloading what the v
   // together ~66k): the fitted view stays at level 0, a zoom into one end refines there.
   const budget = 60_000;
   await page.goto(`${daemon.url}${datasetPath}?budget=${budget}`);
+  // Settled: the view complete and unchanged over 300 ms (the controls' damping has stopped and
+  // no tile arrived meanwhile).
   const settled = async () => {
-    await page.waitForTimeout(300); // the wheel's or the button's frame is drawn
-    await page.waitForFunction(() => window.pointdagViewer?.state().finestVisibleLevelDrawn, null, { timeout: 60_000, polling: 100 });
-    return page.evaluate(() => window.pointdagViewer.state());
+    const snapshot = () => page.evaluate(() => window.pointdagViewer?.state());
+    const key = (st) => JSON.stringify([st.levelsDrawn, st.tilesOnScreen, st.pointsOnScreen, st.tilesFetched]);
+    const deadline = Date.now() + 60_000;
+    for (;;) {
+      const before = await snapshot();
+      await page.waitForTimeout(300);
+      const after = await snapshot();
+      if (before?.finestVisibleLevelDrawn && after?.finestVisibleLevelDrawn && key(before) === key(after)) return after;
+      assert.ok(Date.now() < deadline, `the view did not settle in 60 s: ${JSON.stringify(after)}`);
+    }
   };
   const box = await page.locator('canvas').boundingBox();
   // Zoom in with the wheel over a point of the scan (clear of the HUD, which takes the wheel there).
