@@ -165,13 +165,7 @@ StatusOr<DatasetShape> ParseDatasetShape(std::string_view body) {
   ASSIGN_OR_RETURN(const nlohmann::json json, ParseServerJson(body, "the dataset description"));
   const JsonFields fields(json, "the dataset description", StatusCode::kMalformed);
   DatasetShape out;
-  ASSIGN_OR_RETURN(const int64_t tile_depth, fields.Int("tile_depth", 2, 8));
-  ASSIGN_OR_RETURN(const int64_t levels, fields.Int("levels", 1, kMaxDepth - tile_depth + 1));
-  out.tile_depth = static_cast<int>(tile_depth);
-  out.levels = static_cast<int>(levels);
-  ASSIGN_OR_RETURN(out.origin, fields.Vec3("bounds/min"));
-  ASSIGN_OR_RETURN(out.voxel_size, fields.Number("voxel_size"));
-  if (out.voxel_size <= 0) return Malformed("the dataset description's 'voxel_size' is not positive");
+  ASSIGN_OR_RETURN(static_cast<TileGridShape&>(out), ReadTileGridShape(fields));
   ASSIGN_OR_RETURN(out.points, fields.UintOr("source/points", std::numeric_limits<uint64_t>::max(), 0));
   return out;
 }

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pointdag/tile/tiler.h"
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag::client {
@@ -56,11 +57,7 @@ class Connection {
 
 // ---- What a server says, parsed as untrusted input: every number is range-checked. ----
 
-struct DatasetShape {
-  int levels = 0;      // 1..20
-  int tile_depth = 0;  // 2..8, and levels - 1 + tile_depth <= 21
-  std::array<double, 3> origin{};  // bounds.min
-  double voxel_size = 0;           // finest level, > 0
+struct DatasetShape : TileGridShape {
   uint64_t points = 0;
 };
 // The members of GET /v1/datasets/{id} that FetchDataset needs (proto/PROTOCOL.md §2).

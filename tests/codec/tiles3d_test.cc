@@ -93,7 +93,7 @@ TEST(Glb, RefusesWhatItCannotWrite) {
 
 TilesetDataset Described(const IngestedScan& scan) {
   TilesetDataset d;
-  d.bounds_min = scan.grid.origin;
+  d.origin = scan.grid.origin;
   d.voxel_size = scan.grid.voxel_size;
   d.levels = scan.tiles.levels;
   d.tile_depth = scan.tiles.tile_depth;

@@ -165,4 +165,20 @@ std::string SubmitScan(client::Connection& c, const std::string& scan, const std
   return posted.ok() && posted->status == 202 ? posted->Header("location") : "";
 }
 
+
+bool SuiteDaemon::Start() {
+  if (!daemon_) {
+    dir_ = std::filesystem::temp_directory_path() / (name_ + "-" + std::to_string(getpid()));
+    std::filesystem::remove_all(dir_);
+    daemon_ = std::make_unique<Daemon>(dir_);
+    (void)daemon_->Start();
+  }
+  return daemon_->started();
+}
+
+void SuiteDaemon::Stop() {
+  daemon_.reset();
+  if (!dir_.empty()) std::filesystem::remove_all(dir_);
+}
+
 }  // namespace pointdag

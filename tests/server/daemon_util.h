@@ -62,6 +62,26 @@ class Daemon {
   uint16_t port_ = 0;
 };
 
+// One daemon shared by a test suite, started by the suite's first test: from SetUp(), not
+// SetUpTestSuite(), because gtest skips every test of a suite whose SetUpTestSuite() records a
+// failure and ctest counts those as "Skipped"; here a daemon that does not start fails each test,
+// with its log.
+class SuiteDaemon {
+ public:
+  explicit SuiteDaemon(std::string name) : name_(std::move(name)) {}
+  // Starts it in a fresh temporary folder on the first call; whether it runs.
+  bool Start();
+  // Stops it and removes its folder (for TearDownTestSuite()).
+  void Stop();
+  Daemon* operator->() const { return daemon_.get(); }
+  const std::filesystem::path& dir() const { return dir_; }
+
+ private:
+  std::string name_;
+  std::filesystem::path dir_;
+  std::unique_ptr<Daemon> daemon_;
+};
+
 // A plain TCP client for what the HTTP client will not send: raw bytes, a chosen source address
 // on 127/8 (the daemon's per-client cap), partial requests, and reads with a deadline.
 class RawSocket {

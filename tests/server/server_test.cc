@@ -24,22 +24,9 @@ using client::Response;
 
 class ServerTest : public ::testing::Test {
  protected:
-  // The suite's daemon starts with its first test, not in SetUpTestSuite(): gtest skips every test
-  // of a suite whose SetUpTestSuite() records a failure, and ctest counts those as "Skipped". Here
-  // a daemon that does not start fails each test, with its log.
-  void SetUp() override {
-    if (!daemon_) {
-      dir_ = std::filesystem::temp_directory_path() / ("pointdagd-test-" + std::to_string(getpid()));
-      std::filesystem::remove_all(dir_);
-      daemon_ = new Daemon(dir_);
-      (void)daemon_->Start();
-    }
-    ASSERT_TRUE(daemon_->started()) << "the suite's pointdagd did not start";
-  }
-  static void TearDownTestSuite() {
-    delete daemon_;
-    std::filesystem::remove_all(dir_);
-  }
+  // One daemon for the suite, started by its first test (SuiteDaemon says why).
+  void SetUp() override { ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start"; }
+  static void TearDownTestSuite() { daemon_.Stop(); }
   // Uploads a scan and waits for its dataset; returns the dataset's metadata.
   static nlohmann::json Ingest(const std::filesystem::path& scan, const std::string& query) {
     auto c = daemon_->Connect();
@@ -54,8 +41,7 @@ class ServerTest : public ::testing::Test {
     EXPECT_EQ(job["percent"], 100.0);
     return Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()));
   }
-  static inline std::filesystem::path dir_;
-  static inline Daemon* daemon_ = nullptr;
+  static inline SuiteDaemon daemon_{"pointdagd-test"};
 };
 
 TEST_F(ServerTest, HealthAndMetrics) {
@@ -73,7 +59,7 @@ TEST_F(ServerTest, HealthAndMetrics) {
   // Where the stages with Vulkan kernels run, decided at start and said in the log too.
   EXPECT_NE(metrics.body.find("pointdag_stage_device{stage=\"voxelize\",device=\""), std::string::npos) << metrics.body;
   EXPECT_NE(metrics.body.find("pointdag_stage_device{stage=\"color_blocks\",device=\""), std::string::npos) << metrics.body;
-  const auto log = testing::ReadBytes(dir_ / "daemon.log");
+  const auto log = testing::ReadBytes(daemon_.dir() / "daemon.log");
   EXPECT_NE(std::string(log.begin(), log.end()).find("stages: voxelize: "), std::string::npos);
   EXPECT_NE(std::string(log.begin(), log.end()).find("; color_blocks: "), std::string::npos);
 }

@@ -39,21 +39,9 @@ std::vector<std::string> ContentUris(const nlohmann::json& tileset) {
 
 class Tiles3dServer : public ::testing::Test {
  protected:
-  // One daemon for the suite, started by its first test (see ServerTest in server_test.cc).
-  void SetUp() override {
-    if (!daemon_) {
-      dir_ = std::filesystem::temp_directory_path() / ("pointdagd-tiles3d-test-" + std::to_string(getpid()));
-      std::filesystem::remove_all(dir_);
-      daemon_ = new Daemon(dir_);
-      (void)daemon_->Start();
-    }
-    ASSERT_TRUE(daemon_->started()) << "the suite's pointdagd did not start";
-  }
-  static void TearDownTestSuite() {
-    delete daemon_;
-    daemon_ = nullptr;
-    std::filesystem::remove_all(dir_);
-  }
+  // One daemon for the suite, started by its first test (SuiteDaemon says why).
+  void SetUp() override { ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start"; }
+  static void TearDownTestSuite() { daemon_.Stop(); }
   // Uploads a scan of ../shared/data and waits for its dataset; "" with a failure when it fails.
   static std::string Ingest(const std::string& scan, const std::string& query) {
     auto c = daemon_->Connect();
@@ -68,8 +56,7 @@ class Tiles3dServer : public ::testing::Test {
     static const std::string dataset = Ingest("autzen_trim_pdrf3_rgb.las", "name=autzen&voxel=0.5");
     return dataset;
   }
-  static inline std::filesystem::path dir_;
-  static inline Daemon* daemon_ = nullptr;
+  static inline SuiteDaemon daemon_{"pointdagd-tiles3d-test"};
 };
 
 // 200 with the immutable-caching headers and an ETag that is the bytes' XXH3; then 304 for it.

@@ -110,4 +110,16 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
   return set;
 }
 
+StatusOr<TileGridShape> ReadTileGridShape(const JsonFields& description) {
+  TileGridShape out;
+  ASSIGN_OR_RETURN(const int64_t tile_depth, description.Int("tile_depth", 2, 8));
+  ASSIGN_OR_RETURN(const int64_t levels, description.Int("levels", 1, kMaxDepth - tile_depth + 1));
+  out.tile_depth = static_cast<int>(tile_depth);
+  out.levels = static_cast<int>(levels);
+  ASSIGN_OR_RETURN(out.origin, description.Vec3("bounds/min"));
+  ASSIGN_OR_RETURN(out.voxel_size, description.Number("voxel_size"));
+  if (!(out.voxel_size > 0)) return Malformed("the dataset description's 'voxel_size' is not positive");
+  return out;
+}
+
 }  // namespace pointdag

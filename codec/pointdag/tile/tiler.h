@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointdag/container/json_fields.h"
 #include "pointdag/pipeline.h"
 
 namespace pointdag {
@@ -48,6 +49,18 @@ struct TileSet {
 // `finest` holds the voxels at the finest level; `scan` and `source_name` go into each tile's metadata.
 StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, const std::string& source_name,
                              const TilingOptions& options);
+
+// The LOD grid a dataset description declares (GET /v1/datasets/{id}, proto/PROTOCOL.md §2): what a
+// client needs to place tiles. The description may come from a server, so every member is
+// range-checked: 2 <= tile_depth <= 8, 1 <= levels, levels - 1 + tile_depth <= 21, voxel_size > 0.
+struct TileGridShape {
+  int levels = 0;      // L + 1
+  int tile_depth = 0;  // T
+  std::array<double, 3> origin{};  // bounds.min: the voxel cube's corner in the dataset frame
+  double voxel_size = 0;           // finest level
+};
+// kMalformed (or the code `description` was made with) naming the member.
+StatusOr<TileGridShape> ReadTileGridShape(const JsonFields& description);
 
 // The voxels of one level (codes of depth T + level, mean colors), as BuildTiles cuts them.
 VoxelGrid LevelGrid(const VoxelGrid& finest, int level, int tile_depth);

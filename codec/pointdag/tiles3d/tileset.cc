@@ -24,13 +24,7 @@ double TilesetDataset::LevelVoxelSize(int level) const { return std::ldexp(voxel
 StatusOr<TilesetDataset> ParseTilesetDataset(const nlohmann::json& dataset) {
   const JsonFields fields(dataset, "the dataset description", StatusCode::kMalformed);
   TilesetDataset out;
-  ASSIGN_OR_RETURN(const int64_t tile_depth, fields.Int("tile_depth", 2, 8));
-  ASSIGN_OR_RETURN(const int64_t levels, fields.Int("levels", 1, kMaxDepth - tile_depth + 1));
-  out.tile_depth = static_cast<int>(tile_depth);
-  out.levels = static_cast<int>(levels);
-  ASSIGN_OR_RETURN(out.bounds_min, fields.Vec3("bounds/min"));
-  ASSIGN_OR_RETURN(out.voxel_size, fields.Number("voxel_size"));
-  if (out.voxel_size <= 0) return Malformed("the dataset description's 'voxel_size' is not positive");
+  ASSIGN_OR_RETURN(static_cast<TileGridShape&>(out), ReadTileGridShape(fields));
   const nlohmann::json* georeferenced = fields.Find("frame/georeferenced");
   if (georeferenced == nullptr || !georeferenced->is_boolean()) {
     return Malformed("the dataset description's 'frame/georeferenced' is not true or false");
@@ -75,8 +69,8 @@ std::array<double, 6> BoxInFrame(const TilesetDataset& dataset, const TileBox& b
   const double s = dataset.LevelVoxelSize(box.key.level);
   std::array<double, 6> out{};
   for (int a = 0; a < 3; ++a) {
-    out[a] = dataset.bounds_min[a] + static_cast<double>(box.min[a]) * s;
-    out[3 + a] = dataset.bounds_min[a] + (static_cast<double>(box.max[a]) + 1) * s;
+    out[a] = dataset.origin[a] + static_cast<double>(box.min[a]) * s;
+    out[3 + a] = dataset.origin[a] + (static_cast<double>(box.max[a]) + 1) * s;
   }
   return out;
 }

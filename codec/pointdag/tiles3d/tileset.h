@@ -27,11 +27,7 @@
 namespace pointdag {
 
 // What a tileset needs of a dataset (GET /v1/datasets/{id}, proto/PROTOCOL.md §2).
-struct TilesetDataset {
-  std::array<double, 3> bounds_min{};  // origin of the voxel cube in the dataset frame
-  double voxel_size = 0;               // finest level
-  int levels = 0;                      // L + 1
-  int tile_depth = 0;
+struct TilesetDataset : TileGridShape {
   std::optional<std::array<double, 16>> enu_to_ecef;  // column-major; absent without a CRS
 
   double LevelVoxelSize(int level) const;
