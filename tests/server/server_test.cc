@@ -270,7 +270,10 @@ TEST(ServerCrash, KillDuringIngestLeavesNoHalfDatasetAndTheJobResumes) {
   const auto meta = Json(*c->Request("GET", "/v1/datasets/" + job["dataset_id"].get<std::string>()));
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM tiles"), meta["tile_count"].get<int64_t>());
   EXPECT_EQ(Count(daemon.store(), "SELECT COUNT(*) FROM datasets"), 1);
-  EXPECT_TRUE(std::filesystem::is_empty(scratch.path() / "var" / "uploads"));  // the upload is gone once used
+  // The upload is removed once the dataset is durable, just after the job reads "done".
+  const auto uploads = scratch.path() / "var" / "uploads";
+  for (int i = 0; i < 100 && !std::filesystem::is_empty(uploads); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_TRUE(std::filesystem::is_empty(uploads)) << "the upload outlived its job by 5 s";
 }
 
 // A POINTDAG_DEVICE the daemon cannot honour stops it at start with the reason (exit code 2).
