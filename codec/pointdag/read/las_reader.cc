@@ -25,9 +25,6 @@ StatusOr<std::unique_ptr<ScanReader>> LasReader::Open(const std::filesystem::pat
     ASSIGN_OR_RETURN(auto laz_reader, laz::LazReader::Open(path));
     return std::unique_ptr<ScanReader>(std::move(laz_reader));
   }
-  if (h.laszip_vlr) {
-    return Malformed("the file carries a LASzip VLR but its point format byte does not say it is compressed");
-  }
   const uint64_t available = (h.point_data_end - h.point_data_offset) / h.record_length;
   if (h.point_count == 0) return Malformed("LAS header declares zero points");
   if (h.point_count > available) {
