@@ -33,9 +33,14 @@ std::string Sha256(const std::vector<uint8_t>& bytes) {
   return s;
 }
 
+// The manifest's LAZ entries (it lists the reference .las files too).
 nlohmann::json Manifest() {
   std::ifstream in(LazDir() / "manifest.json");
-  return nlohmann::json::parse(in);
+  nlohmann::json laz = nlohmann::json::array();
+  for (const auto& entry : nlohmann::json::parse(in)) {
+    if (entry.contains("laszip_vlr")) laz.push_back(entry);
+  }
+  return laz;
 }
 
 // What we refuse, by design: LASzip 1.x's unchunked compressor and waveform items.
@@ -78,7 +83,7 @@ TEST(Laz, PointsEqualTheMatchingLasFile) {
   int compared = 0;
   for (const auto& entry : Manifest()) {
     if (!entry["matches_reference_las"].is_boolean() || !entry["matches_reference_las"].get<bool>()) continue;
-    if (!RefusalFor(entry).empty()) continue;
+    if (!RefusalFor(entry).empty() || entry["points"] == 0) continue;  // the LAS reader refuses 0 points
     SCOPED_TRACE(entry["file"].get<std::string>());
     auto laz = OpenScan(LazDir() / entry["file"].get<std::string>());
     auto las = OpenScan(LazDir() / entry["reference_las"].get<std::string>());
@@ -162,7 +167,8 @@ TEST(Laz, EncodingALazGivesTheSamePdagAsItsLas) {
   EXPECT_GT(from_laz->grid.morton.size(), 1000u);
   EXPECT_EQ(from_laz->file.geometry, from_las->file.geometry);
   EXPECT_EQ(from_laz->file.colors, from_las->file.colors);
-  EXPECT_EQ(from_laz->file.meta["grid"], from_las->file.meta["grid"]);
+  EXPECT_EQ(from_laz->file.meta.at("voxels"), from_las->file.meta.at("voxels"));
+  EXPECT_EQ(from_laz->file.meta.at("origin"), from_las->file.meta.at("origin"));
   EXPECT_NE(from_laz->file.meta["source"]["compression"].get<std::string>().find("LASzip"), std::string::npos);
 }
 
