@@ -82,7 +82,9 @@ class LayeredChunkDecoder final : public ChunkDecoder {
   }
 
   Status Decode(uint8_t* out, size_t n) override {
-    if (n > left_) return InvalidArgument("asked for " + Num(n) + " points of a LAZ chunk with " + Num(left_) + " left");
+    if (n > left_) {
+      return InvalidArgument("asked for " + Num(n) + " points of a LAZ chunk with " + Num(left_) + " left");
+    }
     for (size_t i = 0; i < n; ++i, out += record_length_) {
       if (first_pending_) {
         std::memcpy(out, first_, record_length_);
@@ -131,7 +133,8 @@ StatusOr<std::unique_ptr<ChunkDecoder>> MakeLayeredChunkDecoder(const LaszipVlr&
   };
   for (const Item& item : items) {
     if (item.type == ItemType::kWavepacket14) {
-      return Unsupported("LAZ item " + ItemName(item) + " (full-waveform packets, point formats 9 and 10) is not supported");
+      return Unsupported("LAZ item " + ItemName(item) +
+                         " (full-waveform packets, point formats 9 and 10) is not supported");
     }
     if (item.version != 3 && item.version != 4) {
       return Unsupported("LAZ item " + ItemName(item) + " uses LASzip's item version " + Num(item.version) +
@@ -139,7 +142,9 @@ StatusOr<std::unique_ptr<ChunkDecoder>> MakeLayeredChunkDecoder(const LaszipVlr&
     }
   }
   size_t i = 0;
-  if (items.empty() || items[0].type != ItemType::kPoint14 || items[0].size != Point14Decoder::kSize) return malformed();
+  if (items.empty() || items[0].type != ItemType::kPoint14 || items[0].size != Point14Decoder::kSize) {
+    return malformed();
+  }
   const uint16_t point_version = items[i++].version;
   std::unique_ptr<Rgb14Decoder> rgb;
   if (i < items.size() && (items[i].type == ItemType::kRgb14 || items[i].type == ItemType::kRgbNir14)) {

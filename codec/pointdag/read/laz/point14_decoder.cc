@@ -289,10 +289,12 @@ void Point14Decoder::Decode(uint8_t* item, uint32_t& context) {
     c->last_intensity[index] = last->intensity;
   }
   if (layers_[kScanAngle].changed() && (changed & (1U << 3))) {
-    last->scan_angle = static_cast<uint16_t>(c->scan_angle.Decompress(static_cast<int16_t>(last->scan_angle), gps_change));
+    const auto angle = static_cast<int16_t>(last->scan_angle);  // predicted signed, kept as bits
+    last->scan_angle = static_cast<uint16_t>(c->scan_angle.Decompress(angle, gps_change));
   }
   if (layers_[kUserData].changed()) {
-    last->user_data = static_cast<uint8_t>(layers_[kUserData].decoder().DecodeSymbol(c->user_data[last->user_data / 4]));
+    ArithmeticModel& model = c->user_data[last->user_data / 4];
+    last->user_data = static_cast<uint8_t>(layers_[kUserData].decoder().DecodeSymbol(model));
   }
   if (layers_[kPointSource].changed() && (changed & (1U << 5))) {
     last->point_source = static_cast<uint16_t>(c->point_source.Decompress(last->point_source));
