@@ -39,6 +39,7 @@ nlohmann::json DescribeDataset(const std::string& id, const std::string& name, c
   const double ours = 8.0 * static_cast<double>(finest_bytes) / voxels;
   nlohmann::json source = {{"format", ScanFormatName(scan.scan.format)}, {"version", scan.scan.format_version},
                            {"points", g.points_in}, {"has_color", g.has_color()}};
+  AddCompressionFields(scan.scan, source);
   return {
       {"id", id},
       {"name", name},

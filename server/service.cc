@@ -171,7 +171,7 @@ HttpResponse Service::Finish(const HttpRequest& request, const std::filesystem::
   const auto remove_upload = [&] { std::filesystem::remove(file, ec); };
   if (std::filesystem::file_size(file, ec) == 0) {
     remove_upload();
-    return FailAnswer(400, "the upload is empty: send a LAS, PLY or PCD scan as the body", route);
+    return FailAnswer(400, "the upload is empty: send a LAS, LAZ, PLY or PCD scan as the body", route);
   }
   // The reader validates every header field against the real size before a job is made.
   auto scan = OpenScan(file);

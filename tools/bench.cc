@@ -100,6 +100,8 @@ nlohmann::json RunCase(const std::filesystem::path& scan, double voxel, uint64_t
   };
 }
 
+}  // namespace
+
 // Each case runs in its own child process so that peak RSS is that case's alone.
 nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlohmann::json()>& run_case) {
   int fds[2];
@@ -138,6 +140,8 @@ std::string MachineName() {
   return model + ", " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores, " + u.sysname + " " + u.machine;
 }
 
+namespace {
+
 // Random single-color lookups and whole-array decoding of the VBR codec at 38 dB, one core.
 nlohmann::json MeasureColorDecoding(const std::vector<Rgb8>& colors) {
   auto encoded = EncodeColors(colors, {ColorCodec::kVariableRate, 38.0});
@@ -173,6 +177,8 @@ std::vector<std::filesystem::path> ScansIn(const std::string& dir) {
   return scans;
 }
 
+}  // namespace
+
 // The daemon's pipeline (read, georeference, voxelize, tile, Draco) on one scan at its derived voxel size.
 nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_points_in_memory) {
   malloc_trim(0);
@@ -207,6 +213,8 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
           {"points_per_s", points / ingested->seconds},
           {"peak_rss_over_baseline_bytes", peak - baseline}};
 }
+
+namespace {
 
 int RunIngestBench(const BenchOptions& options) {
   if (!options.json) {
@@ -368,6 +376,7 @@ int RunDeviceBench(const BenchOptions& options) {
 int RunBench(const BenchOptions& options) {
   if (options.colors) return RunColorBench(options);
   if (options.devices) return RunDeviceBench(options);
+  if (options.laz) return RunLazBench(options);
   if (options.ingest) return RunIngestBench(options);
   const auto scans = ScansIn(options.data_dir);
   if (!options.json) {

@@ -2,6 +2,9 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace pointdag {
@@ -12,9 +15,18 @@ struct BenchOptions {
   bool colors = false;  // the color codecs' rate-distortion table and decoding speed instead
   bool ingest = false;  // the daemon's pipeline per scan: stage times, points/s, peak RSS
   bool devices = false;  // each stage with Vulkan kernels, CPU path vs Vulkan path
+  bool laz = false;      // LAZ decoding (data_dir/laz): points/s on one core and all, LAZ vs LAS ingest
   uint64_t max_points_in_memory = uint64_t{1} << 25;
 };
 
 int RunBench(const BenchOptions& options);
+int RunLazBench(const BenchOptions& options);  // tools/laz_bench.cc
+
+// Shared by the benchmarks. The CPU in words ("Intel Xeon ..., 2 threads").
+std::string MachineName();
+// Runs one case in a forked child, so each case's peak RSS is its own; its JSON comes back.
+nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlohmann::json()>& run_case);
+// IngestScan as pointdagd runs it on one scan: stage times, points/s, sizes, peak RSS.
+nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_points_in_memory);
 
 }  // namespace pointdag

@@ -16,8 +16,8 @@
 
 #include "pointdag/read/byte_io.h"
 #include "pointdag/read/laz/chunk_decoder.h"
-#include "pointdag/read/laz/integer_decompressor.h"
 #include "pointdag/read/laz/laszip_vlr.h"
+#include "pointdag/read/laz/laz_reader.h"
 #include "pointdag/read/laz/layered_item_decoder.h"
 #include "test_util.h"
 
@@ -51,69 +51,29 @@ struct Chunk {
   uint64_t start = 0, size = 0, points = 0;
 };
 
-// A LAS 1.4 LAZ file taken apart just enough to reach its chunks (the reader proper is
-// laz_reader.h): header fields, the LASzip VLR, the chunk table.
+// A LAZ file's bytes, with its LASzip VLR and chunks as the reader (laz_reader.h) finds them.
 struct LazFile {
   std::vector<uint8_t> bytes;
   LaszipVlr vlr;
   uint32_t record_length = 0;
   uint64_t points = 0;
-  uint64_t data_offset = 0;
   std::vector<Chunk> chunks;
 };
-
-// Test-only reading of LASzip's chunk table (version, count, then per chunk the arithmetic-coded
-// point count (variable chunks) and byte size, each as a correction to the previous chunk's).
-std::vector<Chunk> ReadChunkTableForTest(const LazFile& f) {
-  const uint8_t* p = f.bytes.data();
-  const auto table = static_cast<uint64_t>(LoadLE<int64_t>(p + f.data_offset));
-  const uint32_t count = LoadLE<uint32_t>(p + table + 4);
-  ArithmeticDecoder dec;
-  dec.Init(p + table + 8, p + f.bytes.size());
-  IntegerDecompressor ic(dec, 32, 2);
-  std::vector<Chunk> chunks;
-  uint64_t start = f.data_offset + 8, left = f.points;
-  int32_t points = 0, size = 0;
-  for (uint32_t i = 0; i < count; ++i) {
-    Chunk c;
-    if (f.vlr.variable_chunks()) {
-      points = ic.Decompress(points, 0);
-      c.points = static_cast<uint32_t>(points);
-    } else {
-      c.points = std::min<uint64_t>(f.vlr.chunk_size, left);
-    }
-    size = ic.Decompress(size, 1);
-    c.start = start;
-    c.size = static_cast<uint32_t>(size);
-    start += c.size;
-    left -= c.points;
-    chunks.push_back(c);
-  }
-  EXPECT_FALSE(dec.overran());
-  return chunks;
-}
 
 LazFile OpenLaz(const std::string& name) {
   LazFile f;
   f.bytes = ReadBytes(LazDir() / name);
-  const uint8_t* p = f.bytes.data();
-  const uint16_t header_size = LoadLE<uint16_t>(p + 94);
-  f.data_offset = LoadLE<uint32_t>(p + 96);
-  const uint32_t vlr_count = LoadLE<uint32_t>(p + 100);
-  f.record_length = LoadLE<uint16_t>(p + 105);
-  f.points = LoadLE<uint64_t>(p + 247);
-  size_t at = header_size;
-  for (uint32_t i = 0; i < vlr_count; ++i) {
-    const uint16_t record_id = LoadLE<uint16_t>(p + at + 18);
-    const uint16_t length = LoadLE<uint16_t>(p + at + 20);
-    if (FixedString(p + at + 2, 16) == "laszip encoded" && record_id == 22204) {
-      auto vlr = ParseLaszipVlr(std::vector<unsigned char>(p + at + 54, p + at + 54 + length), f.record_length);
-      EXPECT_TRUE(vlr.ok()) << vlr.status().ToString();
-      if (vlr.ok()) f.vlr = *vlr;
-    }
-    at += 54 + size_t{length};
+  auto reader = LazReader::Open(LazDir() / name);
+  EXPECT_TRUE(reader.ok()) << reader.status().ToString();
+  if (!reader.ok()) return f;
+  f.vlr = (*reader)->vlr();
+  f.record_length = (*reader)->record_length();
+  const ChunkTable& table = (*reader)->chunks();
+  EXPECT_FALSE(table.sequential) << name << " has a chunk table";
+  for (size_t i = 0; i < table.size(); ++i) {
+    f.chunks.push_back({table.starts[i], table.starts[i + 1] - table.starts[i], table.points[i]});
+    f.points += table.points[i];
   }
-  f.chunks = ReadChunkTableForTest(f);
   return f;
 }
 
@@ -177,8 +137,8 @@ TEST_P(LayeredOracle, RecordsMatchTheManifest) {
     records.insert(records.end(), chunk.begin(), chunk.end());
     points += c.points;
   }
-  EXPECT_EQ(points, f.points);
   const nlohmann::json entry = ManifestEntry(GetParam().file);
+  EXPECT_EQ(points, entry["points"].get<uint64_t>());
   EXPECT_EQ(Sha256(records.data(), records.size()), entry["decoded_points_sha256"].get<std::string>());
   if (entry.contains("reference_las") && entry["reference_las"].is_string()) {
     const auto las = ReadBytes(LazDir() / entry["reference_las"].get<std::string>());

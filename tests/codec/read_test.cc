@@ -256,12 +256,12 @@ TEST_F(MalformedLas, UnknownVersionAndFormat) {
   EXPECT_EQ(Open(b).code(), StatusCode::kUnsupported);
 }
 
-TEST_F(MalformedLas, LazIsRecognisedAndRefused) {
+TEST_F(MalformedLas, LazFlagWithoutItsVlrIsMalformed) {
   auto b = Good();
-  b[104] |= 0x80;  // LASzip sets the top bit of the point format
+  b[104] |= 0x80;  // LASzip sets the top bit of the point format, and adds its VLR
   const Status s = Open(b);
-  EXPECT_EQ(s.code(), StatusCode::kUnsupported);
-  EXPECT_NE(s.message().find("LAZ"), std::string::npos) << s.message();
+  EXPECT_EQ(s.code(), StatusCode::kMalformed);
+  EXPECT_NE(s.message().find("no LASzip VLR"), std::string::npos) << s.message();
 }
 
 TEST(ScanReader, RefusesUnknownAndEmptyFiles) {

@@ -88,18 +88,18 @@ TEST_F(ServerTest, ErrorPathsAnswerWithTheirStatusAndAJsonMessage) {
   EXPECT_EQ(r.status, 400);
   EXPECT_EQ(error_of(r), "voxel must be a positive number");
 
-  // LAZ: a LAS header whose point format has the compression bit set.
+  // A LAS header whose point format claims LAZ without LASzip's VLR.
   auto laz = testing::ReadBytes(tiny);
   laz[104] |= 0x80;
   testing::WriteBytes(scratch / "x.laz", laz);
   c = daemon_->Connect();
   r = *c->Upload("/v1/datasets", scratch / "x.laz", kAuth);
-  EXPECT_EQ(r.status, 415);
-  EXPECT_NE(error_of(r).find("LAZ"), std::string::npos) << r.body;
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(error_of(r), "Malformed: the point format says LAZ but the file has no LASzip VLR");
   testing::WriteBytes(scratch / "note.txt", {'h', 'e', 'l', 'l', 'o'});
   r = *c->Upload("/v1/datasets", scratch / "note.txt", kAuth);
   EXPECT_EQ(r.status, 415);
-  EXPECT_EQ(error_of(r), "Unsupported: the upload is not a LAS, PLY or PCD scan (unrecognised first bytes)");
+  EXPECT_EQ(error_of(r), "Unsupported: the upload is not a LAS, LAZ, PLY or PCD scan (unrecognised first bytes)");
 
   // Truncated LAS: the reader's message, and no job made.
   auto truncated = testing::ReadBytes(tiny);
@@ -120,6 +120,44 @@ TEST_F(ServerTest, ErrorPathsAnswerWithTheirStatusAndAJsonMessage) {
   EXPECT_EQ(r.Header("allow"), "GET");
   r = *c->Request("DELETE", "/v1/datasets/0000000000000000");
   EXPECT_EQ(r.status, 401);
+}
+
+// LAZ and COPC are ingested like LAS; what we do not decode, a cut file and a damaged chunk are
+// refused with the reason (the chunk named), and nothing is stored for them.
+TEST_F(ServerTest, LazIsIngestedAndBadLazIsRefusedWithTheReason) {
+  const auto laz_dir = testing::DataDir() / "laz";
+  if (!std::filesystem::exists(laz_dir / "pdal_autzen_trim.laz")) GTEST_SKIP() << laz_dir << " not found; skipping";
+  const nlohmann::json copc = Ingest(laz_dir / "pdal_1.2-with-color.copc.laz", "name=copc&voxel=4");
+  ASSERT_TRUE(copc.contains("source")) << copc.dump();
+  EXPECT_EQ(copc["source"]["points"], 1065);
+  EXPECT_EQ(copc["source"]["has_color"], true);
+  EXPECT_NE(copc["source"]["compression"].get<std::string>().find("layered, 65 variable chunks"), std::string::npos)
+      << copc.dump();
+  EXPECT_EQ(copc["source"]["copc"]["nodes"], 65);
+
+  testing::ScratchDir scratch;
+  const auto error_of = [](const Response& r) { return Json(r)["error"].get<std::string>(); };
+  auto c = daemon_->Connect();
+  Response r = *c->Upload("/v1/datasets", laz_dir / "laspy_fullwave.laz", kAuth);
+  EXPECT_EQ(r.status, 415);
+  EXPECT_NE(error_of(r).find("WAVEPACKET14"), std::string::npos) << r.body;
+
+  const auto bytes = testing::ReadBytes(laz_dir / "pdal_autzen_trim.laz");
+  testing::WriteBytes(scratch / "cut.laz", std::vector<uint8_t>(bytes.begin(), bytes.begin() + 300000));
+  r = *c->Upload("/v1/datasets", scratch / "cut.laz", kAuth);
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(error_of(r).find("cut short"), std::string::npos) << r.body;
+
+  // Zeros over the middle of the second chunk: the header and table are fine, the job fails.
+  auto damaged = bytes;
+  std::fill(damaged.begin() + 250000, damaged.begin() + 260000, uint8_t{0});
+  testing::WriteBytes(scratch / "damaged.laz", damaged);
+  r = *c->Upload("/v1/datasets?name=damaged", scratch / "damaged.laz", kAuth);
+  ASSERT_EQ(r.status, 202) << r.body;
+  const nlohmann::json job = WaitForJob(*c, r.Header("location"));
+  EXPECT_EQ(job["status"], "failed") << job.dump();
+  EXPECT_NE(job["error"].get<std::string>().find("LAZ chunk 1 of 3"), std::string::npos) << job.dump();
+  EXPECT_TRUE(job["dataset_id"].is_null());
 }
 
 TEST_F(ServerTest, AWrongStoredCrsFailsTheJobAndStoresNothing) {

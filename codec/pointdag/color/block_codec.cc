@@ -161,8 +161,9 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocksOnDevice(gpu::VulkanContext& devic
 }
 
 // Both paths on 4 macro blocks of a noisy gradient (the Vulkan one after a warm-up run).
+constexpr size_t kCalibrationColors = 4 * kMacroBlockColors;
 StatusOr<gpu::StageTiming> CalibrateColorBlocks(gpu::VulkanContext& device) {
-  std::vector<Rgb8> colors(4 * kMacroBlockColors);
+  std::vector<Rgb8> colors(kCalibrationColors);
   uint32_t noise = 12345;
   for (size_t i = 0; i < colors.size(); ++i) {
     noise = noise * 1664525u + 1013904223u;
@@ -192,7 +193,8 @@ StatusOr<gpu::VulkanContext*> ColorBlocksDevice() { return gpu::DeviceFor(gpu::S
 
 StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse) {
   const Threshold threshold(max_mse);
-  ASSIGN_OR_RETURN(gpu::VulkanContext* const device, ColorBlocksDevice());
+  ASSIGN_OR_RETURN(gpu::VulkanContext* const device,
+                   gpu::DeviceFor(gpu::Stage::kColorBlocks, CalibrateColorBlocks, colors.size() < kCalibrationColors));
   if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
   return EncodeBlocksOnCpu(colors, layout, threshold);
 }

@@ -25,7 +25,7 @@ StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path
   char magic[16] = {};
   const size_t got = std::fread(magic, 1, sizeof(magic), f);
   std::fclose(f);
-  if (got >= 4 && std::memcmp(magic, "LASF", 4) == 0) return LasReader::Open(path);  // LAZ is refused inside
+  if (got >= 4 && std::memcmp(magic, "LASF", 4) == 0) return LasReader::Open(path);  // LAZ too: LasReader hands it over
   if (got >= 4 && std::memcmp(magic, "ply", 3) == 0 && (magic[3] == '\n' || magic[3] == '\r')) {
     return OpenPclScan(path, ScanFormat::kPly);
   }
@@ -35,7 +35,7 @@ StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path
     return OpenPclScan(path, ScanFormat::kPcd);
   }
   if (got == 0) return Malformed(path.string() + " is empty");
-  return Unsupported(path.string() + " is not a LAS, PLY or PCD scan (unrecognised first bytes)");
+  return Unsupported(path.string() + " is not a LAS, LAZ, PLY or PCD scan (unrecognised first bytes)");
 }
 
 StatusOr<ScanSurvey> SurveyScan(ScanReader& reader, size_t batch_points) {

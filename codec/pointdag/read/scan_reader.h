@@ -16,11 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "pointdag/read/laz/copc_info.h"
 #include "pointdag/status.h"
 
 namespace pointdag {
 
-enum class ScanFormat { kLas, kPly, kPcd };
+enum class ScanFormat { kLas, kPly, kPcd };  // LAZ and COPC are kLas with `compression` set
 const char* ScanFormatName(ScanFormat format);
 
 struct Bounds {
@@ -52,6 +53,10 @@ struct ScanInfo {
   int stored_color_bits = 8;    // width of the stored color fields: 16 for LAS, 8 for PLY/PCD
   std::string crs_wkt;          // LAS WKT VLR/EVLR (2112), empty if none
   std::optional<GeoKeys> geokeys;
+  // LAZ: how the records were compressed ("LASzip 3.4r3 layered, 65 variable chunks: POINT14:30:v3
+  // RGB14:6:v3"); empty for a plain LAS file.
+  std::string compression;
+  std::optional<laz::CopcHierarchy> copc;  // a COPC file's octree index (its `problem` says if unusable)
 };
 
 // Points of one batch, structure-of-arrays so consumers touch only what they need.
@@ -79,7 +84,7 @@ class ScanReader {
   uint16_t max_color_seen_ = 0;
 };
 
-// Opens any supported scan. LAZ is recognised and refused with kUnsupported.
+// Opens any supported scan: LAS, LAZ (COPC too), PLY, PCD.
 StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path);
 
 // Summary of a full pass over the scan: exact bounds, counts and color depth.

@@ -85,10 +85,11 @@ StatusOr<VulkanContext*> ProcessDevice() {
   return ChooseLocked(s);
 }
 
-StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate) {
+StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate, bool small_input) {
   ProcessState& s = State();
   std::lock_guard lock(s.mutex);
   ASSIGN_OR_RETURN(VulkanContext* const context, ChooseLocked(s));
+  if (small_input && s.choice == DeviceChoice::kAuto) return nullptr;
   if (auto it = s.stages.find(stage); it != s.stages.end()) return it->second.vulkan ? context : nullptr;
   StageChoice made{stage, false, "cpu", "", {}};
   if (s.choice == DeviceChoice::kCpu) {

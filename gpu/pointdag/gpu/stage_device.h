@@ -40,8 +40,10 @@ struct StageTiming {
 using Calibration = std::function<StatusOr<StageTiming>(VulkanContext&)>;
 
 // The device `stage` runs on, null for the CPU path. Under `auto`, `calibrate` decides, once per
-// process; a calibration that fails leaves the stage on the CPU.
-StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate);
+// process; a calibration that fails leaves the stage on the CPU. Under `auto` an input smaller than
+// the calibration's (`small_input`) stays on the CPU too: the measurement says nothing about it, and
+// a dispatch's fixed cost dominates it (thousands of one-voxel tiles took ~100 ms each on lavapipe).
+StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate, bool small_input = false);
 
 struct StageChoice {
   Stage stage;
