@@ -39,7 +39,12 @@ nlohmann::json DescribeDataset(const std::string& id, const std::string& name, c
   const double ours = 8.0 * static_cast<double>(finest_bytes) / voxels;
   nlohmann::json source = {{"format", ScanFormatName(scan.scan.format)}, {"version", scan.scan.format_version},
                            {"points", g.points_in}, {"has_color", g.has_color()}};
-  AddCompressionFields(scan.scan, source);
+  // A LAZ source's compression and its usable COPC index: the dataset's, never in each tile.
+  if (!scan.scan.compression.empty()) source["compression"] = scan.scan.compression;
+  if (scan.scan.copc && scan.scan.copc->problem.empty()) {
+    const auto& copc = *scan.scan.copc;
+    source["copc"] = {{"nodes", copc.nodes.size()}, {"depth", copc.max_depth}, {"spacing", copc.spacing}};
+  }
   return {
       {"id", id},
       {"name", name},

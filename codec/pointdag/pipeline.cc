@@ -66,13 +66,6 @@ Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
 
 }  // namespace
 
-void AddCompressionFields(const ScanInfo& scan, nlohmann::json& source) {
-  if (!scan.compression.empty()) source["compression"] = scan.compression;
-  if (scan.copc && scan.copc->problem.empty()) {
-    source["copc"] = {{"nodes", scan.copc->nodes.size()}, {"depth", scan.copc->max_depth}, {"spacing", scan.copc->spacing}};
-  }
-}
-
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
                             const Svdag& dag, GeometryCoder coder, const EncodedColors& colors,
                             const ColorEncodeOptions& color_options) {
@@ -94,7 +87,6 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
                            {"points", grid.points_in},
                            {"color_bits", grid.has_color() ? grid.source_color_bits : 0}};
   if (scan.las_point_format >= 0) source["las_point_format"] = scan.las_point_format;
-  AddCompressionFields(scan, source);
   return {
       {"generator", "pointdag 0.1.0"},
       {"source", source},

@@ -64,9 +64,6 @@ StatusOr<EncodedScan> EncodeScan(const std::filesystem::path& input, const Encod
 StatusOr<EncodedScan> EncodeGrid(VoxelGrid grid, const ScanInfo& scan, const std::string& source_name,
                                  const EncodeOptions& options);
 
-// A LAZ source's compression ("LASzip 3.4r3 layered, ...") and its usable COPC index, as JSON fields.
-void AddCompressionFields(const ScanInfo& scan, nlohmann::json& source);
-
 // Metadata JSON for a voxelized scan (source, CRS, grid, counts, codec parameters).
 nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan, const VoxelGrid& grid,
                             const Svdag& dag, GeometryCoder coder, const EncodedColors& colors,

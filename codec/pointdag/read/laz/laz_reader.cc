@@ -86,6 +86,7 @@ StatusOr<std::unique_ptr<LazReader>> LazReader::Open(const std::filesystem::path
 }
 
 Status LazReader::Rewind() {
+  for (auto& slot : slots_) spare_.push_back(std::move(slot));
   slots_.clear();
   next_chunk_ = 0;
   next_point_ = 0;
@@ -96,8 +97,18 @@ Status LazReader::Rewind() {
 // Gives the next chunks a slot each, up to the window.
 Status LazReader::OpenSlots() {
   while (slots_.size() < window_ && next_chunk_ < chunks_.size()) {
-    auto slot = std::make_unique<Slot>();
-    ASSIGN_OR_RETURN(slot->decoder, MakeChunkDecoder(vlr_));
+    // Slots (and their decoders' models) are reused: COPC files have thousands of small chunks.
+    std::unique_ptr<Slot> slot;
+    if (spare_.empty()) {
+      slot = std::make_unique<Slot>();
+      ASSIGN_OR_RETURN(slot->decoder, MakeChunkDecoder(vlr_));
+    } else {
+      slot = std::move(spare_.back());
+      spare_.pop_back();
+      slot->started = false;
+      slot->ready = slot->taken = 0;
+      slot->status = Status::Ok();
+    }
     slot->chunk = next_chunk_;
     slot->first_point = next_point_;
     for (const auto& s : slots_) slot->first_point += s->left + (s->ready - s->taken);
@@ -162,6 +173,7 @@ StatusOr<size_t> LazReader::Next(size_t max_points, const uint8_t*& records) {
       continue;
     }
     if (chunks_.sequential) next_sequential_start_ = s.start + s.decoder->BytesUsed();
+    spare_.push_back(std::move(slots_.front()));
     slots_.erase(slots_.begin());
     RETURN_IF_ERROR(OpenSlots());
   }

@@ -49,6 +49,7 @@ class LazReader final : public ScanReader {
   ChunkTable chunks_;
   size_t window_ = 1;
   std::vector<std::unique_ptr<Slot>> slots_;  // the chunks in flight, in file order
+  std::vector<std::unique_ptr<Slot>> spare_;  // finished slots, kept for their decoders
   size_t next_chunk_ = 0;                     // the next chunk to give a slot
   uint64_t next_sequential_start_ = 0;        // without a table: where the next chunk starts
   uint64_t next_point_ = 0;

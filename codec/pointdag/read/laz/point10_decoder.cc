@@ -50,8 +50,8 @@ void Point10Decoder::Init(const uint8_t* item) {
 
   for (uint16_t& v : last_intensity_) v = 0;
   for (int32_t& v : last_height_) v = 0;
-  for (Point10Median& m : x_diff_) m.Reset();
-  for (Point10Median& m : y_diff_) m.Reset();
+  for (Median5& m : x_diff_) m.Reset();
+  for (Median5& m : y_diff_) m.Reset();
   changed_.Reset();
   for (ArithmeticModel& m : scan_angle_models_) m.Reset();
   return_bits_models_.Reset();

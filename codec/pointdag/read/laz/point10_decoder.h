@@ -11,7 +11,7 @@
 
 #include "pointdag/read/laz/arithmetic_decoder.h"
 #include "pointdag/read/laz/integer_decompressor.h"
-#include "pointdag/read/laz/point10_median.h"
+#include "pointdag/read/laz/median5.h"
 #include "pointdag/read/laz/point10_model_table.h"
 
 namespace pointdag::laz {
@@ -35,7 +35,7 @@ class Point10Decoder {
   // Per return context m (16) and level l (8): the last intensity, height and x/y differences.
   uint16_t last_intensity_[16] = {};
   int32_t last_height_[8] = {};
-  Point10Median x_diff_[16], y_diff_[16];
+  Median5 x_diff_[16], y_diff_[16];
 
   ArithmeticModel changed_{64};
   ArithmeticModel scan_angle_models_[2] = {ArithmeticModel(256), ArithmeticModel(256)};

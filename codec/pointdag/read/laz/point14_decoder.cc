@@ -5,6 +5,7 @@
 
 #include "pointdag/read/byte_io.h"
 #include "pointdag/read/laz/integer_decompressor.h"
+#include "pointdag/read/laz/median5.h"
 #include "pointdag/read/laz/point14_gps_time.h"
 
 namespace pointdag::laz {
@@ -29,69 +30,6 @@ uint32_t ReturnLevel(uint32_t n, uint32_t r) {
   const uint32_t d = n > r ? n - r : r - n;
   return d < 7 ? d : 7;
 }
-
-// The median of the last five values (LASzip's StreamingMedian5), kept sorted as they arrive.
-class Median5 {
- public:
-  void Reset() {
-    v_.fill(0);
-    high_ = true;
-  }
-  int32_t get() const { return v_[2]; }
-  void Add(int32_t x) {
-    if (high_) {
-      if (x < v_[2]) {
-        v_[4] = v_[3];
-        v_[3] = v_[2];
-        if (x < v_[0]) {
-          v_[2] = v_[1];
-          v_[1] = v_[0];
-          v_[0] = x;
-        } else if (x < v_[1]) {
-          v_[2] = v_[1];
-          v_[1] = x;
-        } else {
-          v_[2] = x;
-        }
-      } else {
-        if (x < v_[3]) {
-          v_[4] = v_[3];
-          v_[3] = x;
-        } else {
-          v_[4] = x;
-        }
-        high_ = false;
-      }
-    } else {
-      if (v_[2] < x) {
-        v_[0] = v_[1];
-        v_[1] = v_[2];
-        if (v_[4] < x) {
-          v_[2] = v_[3];
-          v_[3] = v_[4];
-          v_[4] = x;
-        } else if (v_[3] < x) {
-          v_[2] = v_[3];
-          v_[3] = x;
-        } else {
-          v_[2] = x;
-        }
-      } else {
-        if (v_[1] < x) {
-          v_[0] = v_[1];
-          v_[1] = x;
-        } else {
-          v_[0] = x;
-        }
-        high_ = true;
-      }
-    }
-  }
-
- private:
-  std::array<int32_t, 5> v_{};
-  bool high_ = true;
-};
 
 template <typename T>
 void Store(uint8_t* p, T v) {
@@ -262,11 +200,11 @@ void Point14Decoder::Decode(uint8_t* item, uint32_t& context) {
   const uint32_t single = n == 1 ? 1 : 0;
 
   const uint32_t xy_index = (m << 1) | gps_change;
-  int32_t diff = c->dx.Decompress(c->x_median[xy_index].get(), single);
+  int32_t diff = c->dx.Decompress(c->x_median[xy_index].Get(), single);
   last->x = Add(last->x, diff);
   c->x_median[xy_index].Add(diff);
   uint32_t k = c->dx.k();
-  diff = c->dy.Decompress(c->y_median[xy_index].get(), single + (k < 20 ? (k & ~1U) : 20));
+  diff = c->dy.Decompress(c->y_median[xy_index].Get(), single + (k < 20 ? (k & ~1U) : 20));
   last->y = Add(last->y, diff);
   c->y_median[xy_index].Add(diff);
 

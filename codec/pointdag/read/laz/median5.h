@@ -1,5 +1,5 @@
 // LASzip's running median of the last five coordinate differences (StreamingMedian5): the POINT10
-// coder predicts each x and y difference by it. The insertion order decides ties exactly as in
+// and POINT14 coders predict each x and y difference by it. The insertion order decides ties exactly as in
 // LASzip, so the predictions (and hence the decoded points) match bit for bit.
 #pragma once
 
@@ -7,7 +7,7 @@
 
 namespace pointdag::laz {
 
-class Point10Median {
+class Median5 {
  public:
   void Reset() {
     for (int32_t& v : values_) v = 0;
