@@ -12,7 +12,7 @@ export class UploadForm {
     this.api = api;
     this.onDone = onDone;
     this.onUnauthorized = onUnauthorized;
-    this.file = h('input#file', { type: 'file', required: true, accept: '.las,.ply,.pcd' });
+    this.file = h('input#file', { type: 'file', required: true, accept: '.las,.laz,.ply,.pcd' });
     this.name = h('input#name', { type: 'text', placeholder: 'from the file name', maxlength: '200' });
     this.voxel = h('input#voxel', { type: 'number', min: '0', step: 'any', placeholder: 'auto' });
     this.quality = h('input#quality', { type: 'number', min: '10', max: '80', step: 'any', placeholder: '38' });
@@ -31,7 +31,7 @@ export class UploadForm {
       if (f && !this.name.value) this.name.placeholder = f.name.replace(/\.[^.]*$/, '');
     });
     const form = h('form#upload-form', { on: { submit: (e) => { e.preventDefault(); this.submit(); } } },
-      h('label', {}, 'Scan (LAS, PLY, PCD)', this.file),
+      h('label', {}, 'Scan (LAS, LAZ, COPC, PLY, PCD)', this.file),
       h('label', {}, 'Name', this.name),
       h('label', {}, 'Voxel size (optional)', this.voxel),
       h('label', {}, 'Color quality in dB (optional)', this.quality),
