@@ -6,7 +6,7 @@
 #include "pointdag/read/byte_io.h"
 #include "pointdag/read/laz/integer_decompressor.h"
 #include "pointdag/read/laz/median5.h"
-#include "pointdag/read/laz/point14_gps_time.h"
+#include "pointdag/read/laz/gps_time_decoder.h"
 
 namespace pointdag::laz {
 namespace {
@@ -93,7 +93,7 @@ struct Point14Decoder::Context {
         intensity(layers[kIntensity].decoder(), 16, 4),
         scan_angle(layers[kScanAngle].decoder(), 16, 2),
         point_source(layers[kPointSource].decoder(), 16),
-        gps(layers[kGpsTime].decoder()) {}
+        gps(layers[kGpsTime].decoder(), GpsTimeCodes::kPoint14) {}
 
   void Reset(const Fields& first) {
     for (auto& m : changed_values) m.Reset();
@@ -132,7 +132,7 @@ struct Point14Decoder::Context {
   LazyModels flags{64, 64};
   LazyModels user_data{64, 256};
   IntegerDecompressor dx, dy, z, intensity, scan_angle, point_source;
-  Point14GpsTime gps;
+  GpsTimeDecoder gps;
 };
 
 Point14Decoder::Point14Decoder(uint16_t version) : version_(version) {}

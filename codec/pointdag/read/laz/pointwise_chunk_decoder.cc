@@ -5,9 +5,10 @@
 #include <string>
 #include <vector>
 
+#include "pointdag/read/byte_io.h"
 #include "pointdag/read/laz/arithmetic_decoder.h"
 #include "pointdag/read/laz/byte_decoder.h"
-#include "pointdag/read/laz/gpstime11_decoder.h"
+#include "pointdag/read/laz/gps_time_decoder.h"
 #include "pointdag/read/laz/point10_decoder.h"
 #include "pointdag/read/laz/rgb12_decoder.h"
 
@@ -23,7 +24,7 @@ class PointwiseChunkDecoder final : public ChunkDecoder {
     size_t offset = Point10Decoder::kSize;
     for (size_t i = 1; i < vlr.items.size(); ++i) {
       const Item& item = vlr.items[i];
-      if (item.type == ItemType::kGpsTime11) gps_.emplace(decoder_);
+      if (item.type == ItemType::kGpsTime11) gps_.emplace(decoder_, GpsTimeCodes::kGpsTime11);
       if (item.type == ItemType::kRgb12) rgb_.emplace(decoder_);
       if (item.type == ItemType::kByte) bytes_.emplace(decoder_, item.size);
       slots_.push_back({item.type, offset});
@@ -85,7 +86,7 @@ class PointwiseChunkDecoder final : public ChunkDecoder {
 
   void InitItem(const Slot& slot, const uint8_t* item) {
     switch (slot.type) {
-      case ItemType::kGpsTime11: gps_->Init(item); break;
+      case ItemType::kGpsTime11: gps_->Reset(LoadLE<uint64_t>(item)); break;
       case ItemType::kRgb12: rgb_->Init(item); break;
       default: bytes_->Init(item); break;
     }
@@ -93,7 +94,12 @@ class PointwiseChunkDecoder final : public ChunkDecoder {
 
   bool DecodeItem(const Slot& slot, uint8_t* out) {
     switch (slot.type) {
-      case ItemType::kGpsTime11: return gps_->Decode(out);
+      case ItemType::kGpsTime11: {
+        uint64_t time = 0;
+        if (!gps_->Decode(time)) return false;
+        std::memcpy(out, &time, sizeof(time));
+        return true;
+      }
       case ItemType::kRgb12: rgb_->Decode(out); return true;
       default: bytes_->Decode(out); return true;
     }
@@ -102,7 +108,7 @@ class PointwiseChunkDecoder final : public ChunkDecoder {
   const size_t record_length_;
   ArithmeticDecoder decoder_;  // before the items, which keep a reference to it
   Point10Decoder point10_;
-  std::optional<Gpstime11Decoder> gps_;
+  std::optional<GpsTimeDecoder> gps_;
   std::optional<Rgb12Decoder> rgb_;
   std::optional<ByteDecoder> bytes_;
   std::vector<Slot> slots_;
