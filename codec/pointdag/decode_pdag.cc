@@ -49,7 +49,7 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limit
         out.grid.colors.push_back(out.mip_colors[i]);
       }
     } else {
-      ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels));
+      ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels, out.grid.morton));
     }
   }
   return out;

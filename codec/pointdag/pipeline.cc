@@ -53,7 +53,7 @@ Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
         *aim.target_psnr_y += shortfall + 0.25;
       }
     } else {
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors));
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors, out.grid.morton));
     }
     out.file.colors = out.colors.bytes;
   }

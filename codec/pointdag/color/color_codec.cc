@@ -1,32 +1,13 @@
 #include "pointdag/color/color_codec.h"
 
-#include <zstd.h>
-
 #include <cmath>
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/lossless_context.h"
 
 namespace pointdag {
 namespace {
-
-constexpr int kZstdLevel = 19;
-
-StatusOr<std::vector<uint8_t>> LosslessPayload(std::span<const Rgb8> colors) {
-  // Planar differences: neighbours in Morton order are usually alike, so most bytes are near zero.
-  std::vector<uint8_t> planes(3 * colors.size());
-  for (size_t i = 0; i < colors.size(); ++i) {
-    const Rgb8 prev = i ? colors[i - 1] : Rgb8{};
-    planes[i] = static_cast<uint8_t>(colors[i].r - prev.r);
-    planes[colors.size() + i] = static_cast<uint8_t>(colors[i].g - prev.g);
-    planes[2 * colors.size() + i] = static_cast<uint8_t>(colors[i].b - prev.b);
-  }
-  std::vector<uint8_t> z(ZSTD_compressBound(planes.size()));
-  const size_t n = ZSTD_compress(z.data(), z.size(), planes.data(), planes.size(), kZstdLevel);
-  if (ZSTD_isError(n)) return Internal(std::string("zstd: ") + ZSTD_getErrorName(n));
-  z.resize(n);
-  return z;
-}
 
 StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, ColorCodec codec, double max_mse) {
   const BlockLayout layout = codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
@@ -127,7 +108,8 @@ StatusOr<ColorCodec> ParseColorCodec(const std::string& name) {
   return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp, astc)");
 }
 
-StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options) {
+StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,
+                                     std::span<const uint64_t> morton) {
   if (colors.empty()) return InvalidArgument("no colors to encode");
   if (!IsLossy(options.codec) && options.target_psnr_y) {
     return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg, webp or astc)");
@@ -149,7 +131,7 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
     if (options.codec == ColorCodec::kRaw) {
       for (const Rgb8& c : colors) out.bytes.insert(out.bytes.end(), {c.r, c.g, c.b});
     } else {
-      ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, LosslessPayload(colors));
+      ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeLosslessContext(colors, morton));
       out.bytes.insert(out.bytes.end(), payload.begin(), payload.end());
     }
     return out;

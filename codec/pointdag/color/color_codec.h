@@ -1,6 +1,7 @@
 // Stage 5: the colors section, whichever codec codes it, and the quality knob.
 //
-// Codecs: "raw" (24 bits), "lossless" (per-channel differences along the color order, zstd), the
+// Codecs: "raw" (24 bits), "lossless" (predicted from the voxel's decoded neighbours, context-modelled
+// residuals: lossless_context.h; version 1, planar differences in zstd, is still read), the
 // block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB), and the 2D mapping of Paper IIA through
 // image codecs: "png" (lossless), "jpeg", "webp", and the GPU texture format "astc". A target
 // PSNR-Y makes the encoder search the block codecs' MSE threshold (bisection on its logarithm), the
@@ -45,13 +46,18 @@ struct EncodedColors {
   size_t blocks = 0;
 };
 
-StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options);
+// `morton`: the voxels' Morton codes when `colors` are one per voxel in Morton order (leaf mode),
+// else empty; the lossless codec predicts from neighbours found by them.
+StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,
+                                     std::span<const uint64_t> morton = {});
 
 // Color indices are 32-bit in the block codec and the DAG's counts: the most a section may hold.
 constexpr uint64_t kMaxColors = uint64_t{1} << 32;
 
 // Decodes a colors section that must hold `count` colors (1..kMaxColors). `count` must come from
-// decoded geometry, never from metadata alone: the decoders allocate by it.
-StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count);
+// decoded geometry, never from metadata alone: the decoders allocate by it. `morton`: as for
+// EncodeColors (a lossless section coded with them cannot be decoded without them).
+StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count,
+                                         std::span<const uint64_t> morton = {});
 
 }  // namespace pointdag

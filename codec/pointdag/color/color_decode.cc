@@ -5,12 +5,14 @@
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/color_codec.h"
+#include "pointdag/color/lossless_context.h"
 #include "pointdag/entropy/zstd_stream.h"
 
 namespace pointdag {
 namespace {
 
-StatusOr<std::vector<Rgb8>> DecodeLossless(std::span<const uint8_t> payload, uint64_t count) {
+// Version 1 (before the context coder): planar differences in one zstd frame.
+StatusOr<std::vector<Rgb8>> DecodeLosslessZstd(std::span<const uint8_t> payload, uint64_t count) {
   // The frame's content-size field only rejects early; the output grows with what really comes out.
   if (ZSTD_getFrameContentSize(payload.data(), payload.size()) != 3 * count) {
     return Corrupt("lossless colors do not hold one RGB per voxel");
@@ -30,7 +32,8 @@ StatusOr<std::vector<Rgb8>> DecodeLossless(std::span<const uint8_t> payload, uin
 
 }  // namespace
 
-StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count) {
+StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint64_t count,
+                                         std::span<const uint64_t> morton) {
   if (section.empty()) return Truncated("colors section is empty");
   if (count == 0) return Corrupt("a colors section for no voxels");
   if (count > kMaxColors) return ResourceLimit(std::to_string(count) + " colors are more than a colors section may hold");
@@ -43,7 +46,8 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
       return colors;
     }
     case ColorCodec::kLossless:
-      return DecodeLossless(payload, count);
+      if (IsLosslessContextPayload(payload)) return DecodeLosslessContext(payload, count, morton);
+      return DecodeLosslessZstd(payload, count);
     case ColorCodec::kFixedRate:
     case ColorCodec::kVariableRate: {
       ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload, count));

@@ -35,11 +35,11 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
     trials.push_back({ColorCodec::kLossless, std::nullopt});
     trials.push_back({ColorCodec::kRaw, std::nullopt});
     for (const ColorEncodeOptions& trial : trials) {
-      auto encoded = EncodeColors(scan.grid.colors, trial);
+      auto encoded = EncodeColors(scan.grid.colors, trial, scan.grid.morton);
       if (!encoded.ok() && encoded.status().code() == StatusCode::kInvalidArgument) continue;  // target out of its reach
       if (!encoded.ok()) return encoded.status();
       const EncodedColors& colors = *encoded;
-      ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(colors.bytes, scan.grid.colors.size()));
+      ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(colors.bytes, scan.grid.colors.size(), scan.grid.morton));
       const double color_bits = bpv(colors.bytes.size());
       const bool image = trial.codec >= ColorCodec::kPng;
       codecs.push_back({{"name", ColorCodecName(trial.codec)},

@@ -1,0 +1,34 @@
+// The lossless colors' context-modelled coder (colors section codec 1, version 2; proto/PDAG_FORMAT.md
+// §3). Colors are coded in their order, each predicted from colors already coded:
+//  - with the voxels' Morton codes ("neighbour" mode), from the voxel's face, edge and corner
+//    neighbours that precede it in Morton order (x-1, y-1, z-1 always do), found by code, weighted
+//    by nearness; with none of them, from the previous voxel in the order;
+//  - without them (mipmap colors, whose order is not the voxels'), from the previous color.
+// G is predicted first; R and B are predicted as G plus the neighbours' mean R-G and B-G, so the
+// error they share with G is not paid twice. Each residual is a zigzag gamma code on the adaptive
+// binary range coder, its models chosen by how much the neighbours disagree (and, for R and B, by
+// G's residual): flat areas and edges learn separate statistics.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pointdag/status.h"
+#include "pointdag/voxelize/voxelizer.h"
+
+namespace pointdag {
+
+// `morton`: empty (previous-color mode) or one code per color, sorted and unique (neighbour mode).
+// The payload after the codec byte: version, mode, count, range-coded residuals.
+StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton);
+
+// True when `payload` is this coder's (version 2), not the zstd planes of version 1.
+bool IsLosslessContextPayload(std::span<const uint8_t> payload);
+
+// `count` from the decoded geometry; a neighbour-mode payload needs `morton` with `count` codes
+// (sorted and unique, as the geometry enumerates them) and is kInvalidArgument without them.
+StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> payload, uint64_t count,
+                                                  std::span<const uint64_t> morton);
+
+}  // namespace pointdag
