@@ -48,18 +48,20 @@ class MortonTable {
 };
 
 struct Offset {
-  int dx, dy, dz, weight;
+  int dx, dy, dz, d2;  // d2: squared distance
 };
 
-// The 26 neighbours, nearer ones weighing more (faces 4, edges 2, corners 1).
-constexpr std::array<Offset, 26> kOffsets = [] {
-  std::array<Offset, 26> out{};
+constexpr int kRadius = 2;
+constexpr int kOffsetCount = (2 * kRadius + 1) * (2 * kRadius + 1) * (2 * kRadius + 1) - 1;
+// The neighbours within kRadius (x, y and z each within ±kRadius).
+constexpr std::array<Offset, kOffsetCount> kOffsets = [] {
+  std::array<Offset, kOffsetCount> out{};
   int n = 0;
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const int far = (dx != 0) + (dy != 0) + (dz != 0);
-        if (far != 0) out[n++] = {dx, dy, dz, 1 << (3 - far)};
+  for (int dx = -kRadius; dx <= kRadius; ++dx) {
+    for (int dy = -kRadius; dy <= kRadius; ++dy) {
+      for (int dz = -kRadius; dz <= kRadius; ++dz) {
+        const int d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 != 0) out[n++] = {dx, dy, dz, d2};
       }
     }
   }
@@ -74,27 +76,37 @@ struct Prediction {
 
 int Div(int sum, int weight) { return (sum + weight / 2) / weight; }
 
-// Up to 27 weighted colors already decoded, folded into a prediction.
+// Weights by squared distance (index): the near set averages the 26 adjacent voxels, nearer ones
+// weighing more; the wide one averages out more noise over the 5x5x5 block.
+using Weights = std::array<int, 13>;
+constexpr Weights kNear = {0, 4, 2, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+constexpr Weights kWide = {0, 12, 6, 4, 3, 2, 2, 0, 1, 1, 0, 0, 1};
+
+// The decoded neighbours of a voxel (index and squared distance), folded into predictions.
 class Gather {
  public:
-  void Add(const Rgb8& c, int weight) {
-    if (n_ < items_.size()) items_[n_++] = {c, weight};
+  void Add(size_t j, int d2) {
+    if (n_ < items_.size()) items_[n_++] = {j, d2};
   }
-  Prediction Predict() const {
+  size_t size() const { return n_; }
+  std::pair<size_t, int> operator[](size_t k) const { return items_[k]; }
+  Prediction Predict(std::span<const Rgb8> colors, const Weights& weights) const {
     Prediction p;
-    if (n_ == 0) return p;
     int w = 0, g = 0, rg = 0, bg = 0;
     for (size_t i = 0; i < n_; ++i) {
-      const auto& [c, wi] = items_[i];
+      const Rgb8 c = colors[items_[i].first];
+      const int wi = weights[items_[i].second];
       w += wi;
       g += wi * c.g;
       rg += wi * (c.r - c.g);
       bg += wi * (c.b - c.g);
     }
+    if (w == 0) return p;
     p = {Div(g, w), Div(rg, w), Div(bg, w), 0, 0, 0, false};
     int sg = 0, srg = 0, sbg = 0;
     for (size_t i = 0; i < n_; ++i) {
-      const auto& [c, wi] = items_[i];
+      const Rgb8 c = colors[items_[i].first];
+      const int wi = weights[items_[i].second];
       sg += wi * std::abs(c.g - p.g);
       srg += wi * std::abs(c.r - c.g - p.rg);
       sbg += wi * std::abs(c.b - c.g - p.bg);
@@ -106,17 +118,25 @@ class Gather {
   }
 
  private:
-  std::array<std::pair<Rgb8, int>, 27> items_{};
+  std::array<std::pair<size_t, int>, kOffsetCount> items_{};
   size_t n_ = 0;
 };
 
-// The prediction of color i from colors [0, i), which both sides know.
+int Miss(const Prediction& p, const Rgb8& c) {
+  return std::abs(c.g - p.g) + std::abs(c.r - c.g - p.rg) + std::abs(c.b - c.g - p.bg);
+}
+
+// The prediction of color i from colors [0, i), which both sides know. Both weightings are tried
+// on every voxel; the one that missed less on the adjacent decoded voxels predicts the next.
 class Predictor {
  public:
   explicit Predictor(std::span<const uint64_t> morton) : morton_(morton) {
-    if (!morton.empty()) table_ = std::make_unique<MortonTable>(morton);
+    if (!morton.empty()) {
+      table_ = std::make_unique<MortonTable>(morton);
+      misses_.resize(morton.size());
+    }
   }
-  Prediction operator()(std::span<const Rgb8> colors, size_t i) const {
+  Prediction operator()(std::span<const Rgb8> colors, size_t i) {
     Gather gather;
     if (table_) {
       const auto [x, y, z] = MortonDecode(morton_[i]);
@@ -128,22 +148,37 @@ class Predictor {
         const uint64_t code = MortonEncode(static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz));
         if (code >= morton_[i]) continue;  // not decoded yet
         const int64_t j = table_->Find(code);
-        if (j >= 0 && static_cast<size_t>(j) < i) gather.Add(colors[j], o.weight);
+        if (j >= 0 && static_cast<size_t>(j) < i) gather.Add(static_cast<size_t>(j), o.d2);
       }
+      near_ = gather.Predict(colors, kNear);
+      wide_ = gather.Predict(colors, kWide);
+      int near_miss = 0, wide_miss = 0;
+      for (size_t k = 0; k < gather.size(); ++k) {
+        if (gather[k].second > 3) continue;
+        near_miss += misses_[gather[k].first][0];
+        wide_miss += misses_[gather[k].first][1];
+      }
+      const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
+      if (!best.none) return best;
     }
-    Prediction p = gather.Predict();
-    if (p.none && i > 0) {
-      Gather previous;
-      previous.Add(colors[i - 1], 1);
-      p = previous.Predict();
-      p.none = true;  // a weaker guess: its own contexts
+    Prediction p;
+    if (i > 0) {
+      const Rgb8 c = colors[i - 1];
+      p = {c.g, c.r - c.g, c.b - c.g, 0, 0, 0, true};  // a weaker guess: its own contexts
     }
     return p;
+  }
+  // After color i is known: how far each weighting was from it.
+  void Record(size_t i, const Rgb8& c) {
+    if (misses_.empty()) return;
+    misses_[i] = {static_cast<uint16_t>(near_.none ? 0 : Miss(near_, c)), static_cast<uint16_t>(wide_.none ? 0 : Miss(wide_, c))};
   }
 
  private:
   std::span<const uint64_t> morton_;
   std::unique_ptr<MortonTable> table_;
+  std::vector<std::array<uint16_t, 2>> misses_;
+  Prediction near_, wide_;
 };
 
 constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;
@@ -154,6 +189,24 @@ struct Models {
   std::array<GammaModel, 2 * kSpreadBuckets * kResidualBuckets> r, b;
 };
 
+// How much of G's residual R (or B) shares: the least-squares slope of its own miss (from the
+// neighbours' mean) on G's residual, over a decaying window, in 1/16 (0..1.25).
+class Share {
+ public:
+  int Of(int eg) const {
+    const int64_t slope = sxx_ > 0 ? std::clamp<int64_t>(16 * sxy_ / sxx_, 0, 20) : 16;
+    return static_cast<int>((slope * eg + (eg >= 0 ? 8 : -8)) / 16);
+  }
+  void Learn(int eg, int miss) {
+    constexpr int k = 4;
+    sxy_ += int64_t{eg} * miss - (sxy_ >> k);
+    sxx_ += int64_t{eg} * eg - (sxx_ >> k);
+  }
+
+ private:
+  int64_t sxy_ = 0, sxx_ = 0;
+};
+
 int Wrap(int v) { return ((v + 128) & 255) - 128; }
 uint8_t Clamp(int v) { return static_cast<uint8_t>(std::clamp(v, 0, 255)); }
 
@@ -162,7 +215,8 @@ uint8_t Clamp(int v) { return static_cast<uint8_t>(std::clamp(v, 0, 255)); }
 template <class Io>
 void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
   auto models = std::make_unique<Models>();
-  const Predictor predict(morton);
+  Predictor predict(morton);
+  Share share_r, share_b;
   for (size_t i = 0; i < colors.size(); ++i) {
     const Prediction p = predict(colors, i);
     Rgb8& c = colors[i];
@@ -170,11 +224,15 @@ void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton
     const int eg = io.Code(models->g[ctx], Wrap(c.g - p.g));
     c.g = static_cast<uint8_t>((p.g + eg) & 255);
     const int near = Bucket(std::abs(eg), kResidualBuckets) + (p.none ? kResidualBuckets * kSpreadBuckets : 0);
-    const uint8_t pr = Clamp(c.g + p.rg), pb = Clamp(c.g + p.bg);
+    const uint8_t pr = Clamp(p.g + p.rg + share_r.Of(eg));
     const int er = io.Code(models->r[Bucket(p.spread_rg, kSpreadBuckets) * kResidualBuckets + near], Wrap(c.r - pr));
     c.r = static_cast<uint8_t>((pr + er) & 255);
+    const uint8_t pb = Clamp(p.g + p.bg + share_b.Of(eg));
     const int eb = io.Code(models->b[Bucket(p.spread_bg, kSpreadBuckets) * kResidualBuckets + near], Wrap(c.b - pb));
     c.b = static_cast<uint8_t>((pb + eb) & 255);
+    share_r.Learn(eg, c.r - (p.g + p.rg));
+    share_b.Learn(eg, c.b - (p.g + p.bg));
+    predict.Record(i, c);
   }
 }
 
