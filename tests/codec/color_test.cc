@@ -287,6 +287,29 @@ TEST_P(LossyTargetTest, EveryLossyCodecMeetsItsTargetPsnr) {
 
 INSTANTIATE_TEST_SUITE_P(SharedData, LossyTargetTest, ::testing::ValuesIn(kColorScans), testing::ScanFileName());
 
+class LosslessTest : public ::testing::TestWithParam<testing::ScanAtVoxel> {};
+
+// Bit-exact with the neighbours found by Morton code (leaf mode) and from the previous color alone
+// (mipmap mode's order), and smaller than the zstd differences of version 1 ever were.
+TEST_P(LosslessTest, RoundTripsBitExactInBothModes) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = GetParam().voxel;
+  auto scan = EncodeScan(testing::DataDir() / GetParam().file, options);
+  ASSERT_TRUE(scan.ok()) << scan.status().ToString();
+  const auto& grid = scan->grid;
+  for (std::span<const uint64_t> morton : {std::span<const uint64_t>(grid.morton), std::span<const uint64_t>()}) {
+    auto encoded = EncodeColors(grid.colors, {ColorCodec::kLossless, std::nullopt}, morton);
+    ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+    auto decoded = DecodeColors(encoded->bytes, grid.colors.size(), grid.morton);
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_TRUE(*decoded == grid.colors) << (morton.empty() ? "previous" : "neighbours");
+    EXPECT_LT(encoded->bytes.size(), 3 * grid.colors.size());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, LosslessTest, ::testing::ValuesIn(kColorScans), testing::ScanFileName());
+
 TEST(ColorCodec, PipelineStoresAndDecodesLossyColors) {
   SKIP_WITHOUT_DATA();
   EncodeOptions options;
@@ -315,7 +338,11 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
   EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 10393u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 10726u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, {ColorCodec::kLossless, std::nullopt})->bytes.size(), 72993u);
+  // Lossless version 2 (context coder): from neighbours found by Morton code, and from the previous
+  // color alone (mipmap order). Version 1 (zstd differences) took 72993 bytes.
+  const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};
+  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless, scan->grid.morton)->bytes.size(), 46558u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless)->bytes.size(), 54085u);
 }
 
 }  // namespace

@@ -285,7 +285,7 @@ StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> paylo
   std::vector<Rgb8> colors(count);
   DecodeIo io{BinaryRangeDecoder(coded)};
   CodeColors(io, colors, mode == kModeNeighbours ? morton : std::span<const uint64_t>{});
-  if (io.rc.overrun()) return Truncated("lossless colors stream ends early");
+  if (!io.rc.consumed_exactly()) return Corrupt("lossless colors: the stream does not end where its colors do");
   return colors;
 }
 

@@ -113,6 +113,9 @@ class BinaryRangeDecoder {
   }
   // True once the decoder has wanted more bytes than the input had: the stream was truncated.
   bool overrun() const { return overrun_ > 4; }
+  // True when the decoder has read exactly its input, as it does on what Finish() wrote: a stream
+  // that must fill its bytes can then refuse both truncation and trailing bytes.
+  bool consumed_exactly() const { return overrun_ == 0 && pos_ == in_.size(); }
 
  private:
   uint8_t Next() {

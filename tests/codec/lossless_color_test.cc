@@ -1,0 +1,135 @@
+// The lossless colors section (codec 1): version 2, the context coder predicted from decoded
+// neighbours (lossless_context.h), on edge cases and hostile bytes; version 1 (zstd) still decodes.
+// The real scans' round trips are in color_test.cc (LosslessTest).
+#include <gtest/gtest.h>
+#include <zstd.h>
+
+#include <random>
+#include <set>
+
+#include "pointdag/color/color_codec.h"
+#include "pointdag/color/lossless_context.h"
+#include "pointdag/entropy/varint.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+std::vector<uint64_t> DenseMorton(size_t n) {
+  std::vector<uint64_t> m(n);
+  for (size_t i = 0; i < n; ++i) m[i] = i;
+  return m;
+}
+
+// Sorted unique codes on a thin sheet, touching the grid's lowest and highest coordinates.
+std::vector<uint64_t> SheetMorton(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  constexpr uint32_t kMax = (1u << kMaxDepth) - 1;
+  std::set<uint64_t> codes = {MortonEncode(0, 0, 0), MortonEncode(kMax, kMax, kMax), MortonEncode(kMax, 0, 1)};
+  while (codes.size() < n) {
+    const uint32_t x = rng() % 64, y = rng() % 64;
+    codes.insert(MortonEncode(x, y, (x + y) / 8));
+  }
+  return {codes.begin(), codes.end()};
+}
+
+std::vector<Rgb8> RandomColors(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<Rgb8> c(n);
+  for (auto& x : c) x = {static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng())};
+  return c;
+}
+
+void ExpectRoundTrip(const std::vector<Rgb8>& colors, const std::vector<uint64_t>& morton) {
+  auto encoded = EncodeColors(colors, {ColorCodec::kLossless, std::nullopt}, morton);
+  ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+  EXPECT_EQ(encoded->bytes[0], static_cast<uint8_t>(ColorCodec::kLossless));
+  auto decoded = DecodeColors(encoded->bytes, colors.size(), morton);
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  EXPECT_EQ(*decoded, colors);
+}
+
+TEST(LosslessColors, EdgeCasesRoundTripWithAndWithoutNeighbours) {
+  for (const std::vector<uint64_t>& none : {std::vector<uint64_t>{}}) {
+    ExpectRoundTrip({{1, 2, 3}}, none);
+    ExpectRoundTrip(std::vector<Rgb8>(5000, Rgb8{7, 7, 7}), none);
+    ExpectRoundTrip(RandomColors(3000, 1), none);
+  }
+  ExpectRoundTrip({{255, 0, 128}}, {MortonEncode(3, 4, 5)});
+  ExpectRoundTrip(std::vector<Rgb8>(4096, Rgb8{0, 255, 0}), DenseMorton(4096));
+  ExpectRoundTrip(RandomColors(4096, 2), DenseMorton(4096));
+  const auto sheet = SheetMorton(3000, 3);
+  ExpectRoundTrip(RandomColors(sheet.size(), 4), sheet);
+  std::vector<Rgb8> smooth(sheet.size());
+  for (size_t i = 0; i < sheet.size(); ++i) {
+    const auto [x, y, z] = MortonDecode(sheet[i]);
+    smooth[i] = {static_cast<uint8_t>(x * 4), static_cast<uint8_t>(y * 3 + z), static_cast<uint8_t>(250 - y)};
+  }
+  ExpectRoundTrip(smooth, sheet);
+}
+
+TEST(LosslessColors, FlatColorsCostAlmostNothingAndRandomOnesAboutRaw) {
+  const auto morton = DenseMorton(1 << 15);
+  const auto flat = EncodeColors(std::vector<Rgb8>(morton.size(), Rgb8{9, 8, 7}), {ColorCodec::kLossless, std::nullopt}, morton);
+  EXPECT_LT(flat->bytes.size(), 128u);
+  const auto random = EncodeColors(RandomColors(morton.size(), 5), {ColorCodec::kLossless, std::nullopt}, morton);
+  EXPECT_LT(random->bytes.size(), 3 * morton.size() * 105 / 100);
+}
+
+TEST(LosslessColors, Version1ZstdSectionsStillDecode) {
+  const std::vector<Rgb8> colors = {{10, 20, 30}, {11, 19, 35}, {200, 0, 255}};
+  std::vector<uint8_t> planes;
+  for (int ch = 0; ch < 3; ++ch) {
+    for (size_t i = 0; i < colors.size(); ++i) {
+      const auto at = [&](size_t k) { return ch == 0 ? colors[k].r : ch == 1 ? colors[k].g : colors[k].b; };
+      planes.push_back(static_cast<uint8_t>(at(i) - (i ? at(i - 1) : 0)));
+    }
+  }
+  std::vector<uint8_t> section(1 + ZSTD_compressBound(planes.size()));
+  section[0] = static_cast<uint8_t>(ColorCodec::kLossless);
+  section.resize(1 + ZSTD_compress(section.data() + 1, section.size() - 1, planes.data(), planes.size(), 19));
+  auto decoded = DecodeColors(section, colors.size());
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  EXPECT_EQ(*decoded, colors);
+}
+
+TEST(LosslessColors, HostileSectionsAreCleanErrors) {
+  const auto morton = SheetMorton(2000, 6);
+  std::vector<Rgb8> colors = RandomColors(morton.size(), 7);
+  for (size_t i = 0; i < colors.size(); i += 3) colors[i] = {100, 100, 100};
+  const auto section = EncodeColors(colors, {ColorCodec::kLossless, std::nullopt}, morton)->bytes;
+
+  // Neighbour mode needs the geometry's codes, and as many as there are colors.
+  EXPECT_EQ(DecodeColors(section, colors.size()).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(DecodeColors(section, colors.size(), std::span(morton).first(10)).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(DecodeColors(section, colors.size() + 1, morton).status().code(), StatusCode::kCorrupt);
+  // Every truncation, and trailing bytes, are refused: the stream must end where its colors do.
+  for (size_t len = 1; len < section.size(); len += 1 + (len > 8 ? section.size() / 300 : 0)) {
+    EXPECT_FALSE(DecodeColors(std::span(section).first(len), colors.size(), morton).ok()) << len;
+  }
+  auto longer = section;
+  longer.push_back(0);
+  EXPECT_EQ(DecodeColors(longer, colors.size(), morton).status().code(), StatusCode::kCorrupt);
+  // Bit flips decode to a clean error or to some colors, never to a crash (ASan/UBSan builds).
+  std::mt19937 rng(8);
+  for (int trial = 0; trial < 200; ++trial) {
+    auto bad = section;
+    bad[1 + rng() % (bad.size() - 1)] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    auto decoded = DecodeColors(bad, colors.size(), morton);
+    if (decoded.ok()) {
+      EXPECT_EQ(decoded->size(), colors.size());
+    }
+  }
+  // Unknown mode; a count the bytes cannot hold is refused before anything is allocated by it.
+  auto bad_mode = section;
+  bad_mode[2] = 7;
+  EXPECT_EQ(DecodeColors(bad_mode, colors.size(), morton).status().code(), StatusCode::kCorrupt);
+  const uint64_t huge = uint64_t{1} << 31;
+  std::vector<uint8_t> lie = {static_cast<uint8_t>(ColorCodec::kLossless), 2, 0};
+  PutVarint(lie, huge);
+  lie.insert(lie.end(), {0, 0, 0, 0, 0});
+  EXPECT_EQ(DecodeColors(lie, huge).status().code(), StatusCode::kCorrupt);
+}
+
+}  // namespace
+}  // namespace pointdag
