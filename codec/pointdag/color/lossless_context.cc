@@ -280,7 +280,9 @@ StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> paylo
   const std::span<const uint8_t> coded = payload.subspan(pos);
   if (count / kMaxColorsPerByte > coded.size() + 8) return Corrupt("lossless colors: more colors than the bytes can hold");
   if (mode == kModeNeighbours && morton.size() != count) {
-    return InvalidArgument("lossless colors predicted from neighbours need the voxels' Morton codes");
+    // Only leaf-mode colors are coded from neighbours: anywhere else the section is not what the
+    // geometry says it is.
+    return Corrupt("lossless colors predicted from neighbours, but there are no voxels' Morton codes for them");
   }
   std::vector<Rgb8> colors(count);
   DecodeIo io{BinaryRangeDecoder(coded)};

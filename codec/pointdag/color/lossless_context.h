@@ -27,7 +27,8 @@ StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> color
 bool IsLosslessContextPayload(std::span<const uint8_t> payload);
 
 // `count` from the decoded geometry; a neighbour-mode payload needs `morton` with `count` codes
-// (sorted and unique, as the geometry enumerates them) and is kInvalidArgument without them.
+// (sorted and unique, as the geometry enumerates them) and is kCorrupt without them (mipmap colors,
+// for which the encoder writes previous-color mode).
 StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> payload, uint64_t count,
                                                   std::span<const uint64_t> morton);
 
