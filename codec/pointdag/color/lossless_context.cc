@@ -51,22 +51,27 @@ struct Offset {
   int dx, dy, dz, d2;  // d2: squared distance
 };
 
-constexpr int kRadius = 2;
-constexpr int kOffsetCount = (2 * kRadius + 1) * (2 * kRadius + 1) * (2 * kRadius + 1) - 1;
-// The neighbours within kRadius (x, y and z each within ±kRadius).
-constexpr std::array<Offset, kOffsetCount> kOffsets = [] {
-  std::array<Offset, kOffsetCount> out{};
+// The neighbours with |dx|, |dy|, |dz| <= `radius`, minus those within `inner` (a shell).
+template <int radius, int inner>
+constexpr auto Shell() {
+  constexpr int kCount = (2 * radius + 1) * (2 * radius + 1) * (2 * radius + 1) - (2 * inner + 1) * (2 * inner + 1) * (2 * inner + 1);
+  std::array<Offset, kCount> out{};
   int n = 0;
-  for (int dx = -kRadius; dx <= kRadius; ++dx) {
-    for (int dy = -kRadius; dy <= kRadius; ++dy) {
-      for (int dz = -kRadius; dz <= kRadius; ++dz) {
-        const int d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 != 0) out[n++] = {dx, dy, dz, d2};
+  for (int dx = -radius; dx <= radius; ++dx) {
+    for (int dy = -radius; dy <= radius; ++dy) {
+      for (int dz = -radius; dz <= radius; ++dz) {
+        const bool outside = dx < -inner || dx > inner || dy < -inner || dy > inner || dz < -inner || dz > inner;
+        if (outside) out[n++] = {dx, dy, dz, dx * dx + dy * dy + dz * dz};
       }
     }
   }
   return out;
-}();
+}
+constexpr int kRadius = 2, kFarRadius = 4;
+constexpr auto kOffsets = Shell<kRadius, 0>();
+// Searched only for a voxel with no decoded neighbour within kRadius (sparse scans).
+constexpr auto kFarOffsets = Shell<kFarRadius, kRadius>();
+constexpr int kOffsetCount = static_cast<int>(std::max(kOffsets.size(), kFarOffsets.size()));
 
 struct Prediction {
   int g = 128, rg = 0, bg = 0;              // G, R-G and B-G
@@ -78,13 +83,20 @@ int Div(int sum, int weight) { return (sum + weight / 2) / weight; }
 
 // Weights by squared distance (index): the near set averages the 26 adjacent voxels, nearer ones
 // weighing more; the wide one averages out more noise over the 5x5x5 block.
-using Weights = std::array<int, 13>;
+using Weights = std::array<int, 3 * kFarRadius * kFarRadius + 1>;
 constexpr Weights kNear = {0, 4, 2, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
 constexpr Weights kWide = {0, 12, 6, 4, 3, 2, 2, 0, 1, 1, 0, 0, 1};
+// Beyond kRadius, for voxels with nothing nearer: max(1, 64 / d²) (d² from 9 to 3·kFarRadius²).
+constexpr Weights kFar = [] {
+  Weights w{};
+  for (size_t d2 = 9; d2 < w.size(); ++d2) w[d2] = std::max<int>(1, static_cast<int>(64 / d2));
+  return w;
+}();
 
 // The decoded neighbours of a voxel (index and squared distance), folded into predictions.
 class Gather {
  public:
+  void Clear() { n_ = 0; }
   void Add(size_t j, int d2) {
     if (n_ < items_.size()) items_[n_++] = {j, d2};
   }
@@ -137,19 +149,10 @@ class Predictor {
     }
   }
   Prediction operator()(std::span<const Rgb8> colors, size_t i) {
-    Gather gather;
+    Gather& gather = gather_;  // a member: its array is not cleared per voxel
+    gather.Clear();
     if (table_) {
-      const auto [x, y, z] = MortonDecode(morton_[i]);
-      for (const Offset& o : kOffsets) {
-        const int64_t nx = int64_t{x} + o.dx, ny = int64_t{y} + o.dy, nz = int64_t{z} + o.dz;
-        if (nx < 0 || ny < 0 || nz < 0 || nx >= (1 << kMaxDepth) || ny >= (1 << kMaxDepth) || nz >= (1 << kMaxDepth)) {
-          continue;
-        }
-        const uint64_t code = MortonEncode(static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz));
-        if (code >= morton_[i]) continue;  // not decoded yet
-        const int64_t j = table_->Find(code);
-        if (j >= 0 && static_cast<size_t>(j) < i) gather.Add(static_cast<size_t>(j), o.d2);
-      }
+      Collect(i, kOffsets, gather);
       near_ = gather.Predict(colors, kNear);
       wide_ = gather.Predict(colors, kWide);
       int near_miss = 0, wide_miss = 0;
@@ -160,6 +163,9 @@ class Predictor {
       }
       const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
       if (!best.none) return best;
+      Collect(i, kFarOffsets, gather);
+      const Prediction far = gather.Predict(colors, kFar);
+      if (!far.none) return far;
     }
     Prediction p;
     if (i > 0) {
@@ -167,6 +173,21 @@ class Predictor {
       p = {c.g, c.r - c.g, c.b - c.g, 0, 0, 0, true};  // a weaker guess: its own contexts
     }
     return p;
+  }
+  // The decoded voxels at `offsets` from voxel i.
+  template <class Offsets>
+  void Collect(size_t i, const Offsets& offsets, Gather& gather) const {
+    const auto [x, y, z] = MortonDecode(morton_[i]);
+    for (const Offset& o : offsets) {
+      const int64_t nx = int64_t{x} + o.dx, ny = int64_t{y} + o.dy, nz = int64_t{z} + o.dz;
+      if (nx < 0 || ny < 0 || nz < 0 || nx >= (1 << kMaxDepth) || ny >= (1 << kMaxDepth) || nz >= (1 << kMaxDepth)) {
+        continue;
+      }
+      const uint64_t code = MortonEncode(static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz));
+      if (code >= morton_[i]) continue;  // not decoded yet
+      const int64_t j = table_->Find(code);
+      if (j >= 0 && static_cast<size_t>(j) < i) gather.Add(static_cast<size_t>(j), o.d2);
+    }
   }
   // After color i is known: how far each weighting was from it.
   void Record(size_t i, const Rgb8& c) {
@@ -179,6 +200,7 @@ class Predictor {
   std::unique_ptr<MortonTable> table_;
   std::vector<std::array<uint16_t, 2>> misses_;
   Prediction near_, wide_;
+  Gather gather_;
 };
 
 constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;

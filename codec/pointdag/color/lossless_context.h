@@ -2,10 +2,11 @@
 // §3). Colors are coded in their order, each predicted from colors already coded:
 //  - with the voxels' Morton codes ("neighbour" mode), from the voxel's face, edge and corner
 //    neighbours that precede it in Morton order (x-1, y-1, z-1 always do), found by code, weighted
-//    by nearness; with none of them, from the previous voxel in the order;
+//    by nearness (two weightings; the one that missed less on the adjacent voxels predicts); with
+//    none within 2 voxels, from those within 4; with none at all, from the previous voxel;
 //  - without them (mipmap colors, whose order is not the voxels'), from the previous color.
-// G is predicted first; R and B are predicted as G plus the neighbours' mean R-G and B-G, so the
-// error they share with G is not paid twice. Each residual is a zigzag gamma code on the adaptive
+// G is predicted first; R and B as G plus the neighbours' mean R-G and B-G plus a running
+// least-squares share of G's residual, so the error they share with G is not paid twice. Each residual is a zigzag gamma code on the adaptive
 // binary range coder, its models chosen by how much the neighbours disagree (and, for R and B, by
 // G's residual): flat areas and edges learn separate statistics.
 #pragma once
