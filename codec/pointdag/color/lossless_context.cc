@@ -275,7 +275,7 @@ struct DecodeIo {
 
 StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
   if (!morton.empty() && morton.size() != colors.size()) return InvalidArgument("lossless colors: one Morton code per color");
-  if (colors.size() >= (uint64_t{1} << 32)) return InvalidArgument("lossless colors: too many colors");
+  if (uint64_t{colors.size()} >= (uint64_t{1} << 32)) return InvalidArgument("lossless colors: too many colors");
   std::vector<uint8_t> out = {kVersion, morton.empty() ? kModePrevious : kModeNeighbours};
   PutVarint(out, colors.size());
   std::vector<Rgb8> scratch(colors.begin(), colors.end());
