@@ -102,7 +102,11 @@ export class Tiles3dViewer {
     if (this.firstFrameMs === null && visible > 0) this.firstFrameMs = now;
     // Nothing requested, downloading, parsing, or waiting to have its children expanded.
     const t = this.tiles;
-    const busy = t.isLoading || t.downloadQueue.running || t.parseQueue.running || t.processNodeQueue.running;
+    // The queues can be empty between a download's end and its parse being queued: the stats say
+    // what is still on its way.
+    const s = t.stats;
+    const busy = t.isLoading || t.downloadQueue.running || t.parseQueue.running || t.processNodeQueue.running ||
+      s.queued + s.downloading + s.parsing > 0;
     this.complete = !!t.root && !busy && visible > 0;
     if (this.complete && this.finestMs === null) this.finestMs = now;
     if (busy) this.view.requestRender(); // keep traversing while tiles stream in
