@@ -379,6 +379,7 @@ int RunBench(const BenchOptions& options) {
   if (options.colors) return RunColorBench(options);
   if (options.devices) return RunDeviceBench(options);
   if (options.laz) return RunLazBench(options);
+  if (options.versus) return RunVersusBench(options);
   if (options.ingest) return RunIngestBench(options);
   const auto scans = ScansIn(options.data_dir);
   if (!options.json) {

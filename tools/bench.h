@@ -16,11 +16,13 @@ struct BenchOptions {
   bool ingest = false;  // the daemon's pipeline per scan: stage times, points/s, peak RSS
   bool devices = false;  // each stage with Vulkan kernels, CPU path vs Vulkan path
   bool laz = false;      // LAZ decoding (data_dir/laz): points/s on one core and all, LAZ vs LAS ingest
+  bool versus = false;   // issue #14: ours, Draco and G-PCC side by side (sizes at equal PSNR-Y)
   uint64_t max_points_in_memory = uint64_t{1} << 25;
 };
 
 int RunBench(const BenchOptions& options);
 int RunLazBench(const BenchOptions& options);  // tools/laz_bench.cc
+int RunVersusBench(const BenchOptions& options);  // tools/versus_bench.cc
 
 // Shared by the benchmarks. The CPU in words ("Intel Xeon ..., 2 threads").
 std::string MachineName();
