@@ -1,5 +1,5 @@
 // The 2D image mapping's payload (curve, format, side, then PNG/JPEG/WebP bytes that reach
-// OpenImageIO after our own checks): input = 3-byte voxel count + payload (color_fuzz_input.h).
+// libpng / TurboJPEG / libwebp after our own checks): input = 3-byte voxel count + payload (color_fuzz_input.h).
 #include "color_fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -152,16 +152,23 @@ TEST(HostileColors, HugeCountsAreRefusedNotLoopedOn) {
   EXPECT_EQ(DecodeColors(std::vector<uint8_t>{0, 1, 2, 3}, uint64_t{1} << 62).status().code(), StatusCode::kResourceLimit);
 }
 
-TEST(HostileColors, ImageOfAnotherFormatIsNotHandedToOpenImageIo) {
+TEST(HostileColors, ImageOfAnotherFormatOrCutShortIsCorrupt) {
   std::vector<Rgb8> colors(300);
   for (size_t i = 0; i < colors.size(); ++i) colors[i] = {static_cast<uint8_t>(i), 90, static_cast<uint8_t>(255 - i)};
   auto jpeg = EncodeColorImage(colors, Curve::kHilbert, ImageFormat::kJpeg, 90);
   ASSERT_TRUE(jpeg.ok());
   ASSERT_TRUE(DecodeColorImage(*jpeg, colors.size()).ok());
-  (*jpeg)[1] = static_cast<uint8_t>(ImageFormat::kPng);  // a JPEG labelled PNG: OpenImageIO would read it anyway
+  (*jpeg)[1] = static_cast<uint8_t>(ImageFormat::kPng);  // a JPEG labelled PNG: refused before libpng sees it
   const Status status = DecodeColorImage(*jpeg, colors.size()).status();
   EXPECT_EQ(status.code(), StatusCode::kCorrupt);
   EXPECT_TRUE(Mentions(status, "not a png file")) << status.ToString();
+  // Each format's library says "cut short" as an error, never as a warning with texels made up.
+  for (ImageFormat format : {ImageFormat::kPng, ImageFormat::kJpeg, ImageFormat::kWebp}) {
+    auto image = EncodeColorImage(colors, Curve::kHilbert, format, 90);
+    ASSERT_TRUE(image.ok());
+    image->resize(image->size() / 2);
+    EXPECT_EQ(DecodeColorImage(*image, colors.size()).status().code(), StatusCode::kCorrupt) << ImageFormatName(format);
+  }
 }
 
 }  // namespace

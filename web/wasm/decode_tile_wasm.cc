@@ -2,7 +2,7 @@
 // DecodePdag) behind a C ABI for WebAssembly, for the web viewer's worker
 // (web/src/decoder/wasm_decoder.js reads the result through these functions).
 //
-// The WebAssembly build has no zstd, OpenImageIO or astcenc: tiles never use them (their geometry
+// The WebAssembly build has no zstd, image libraries or astcenc: tiles never use them (their geometry
 // is context-coded, their colors VBR), and a .pdag that would need them is refused as Unsupported
 // right after its container is checked, before anything else is decoded (as the JavaScript decoder
 // does, web/src/decoder/decode_pdag.js refuseUnsupported). The stand-ins that let the real sources

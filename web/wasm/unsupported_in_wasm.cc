@@ -1,4 +1,4 @@
-// Stand-ins for the image-mapped color decoders in the WebAssembly build (OpenImageIO and astcenc
+// Stand-ins for the image-mapped color decoders in the WebAssembly build (libpng/TurboJPEG/libwebp and astcenc
 // are not built for emscripten). decode_tile_wasm.cc refuses png, jpeg, webp and astc colors before
 // decoding, so these only keep the real DecodeColors (color/color_decode.cc) linkable.
 #include "pointdag/color/astc_mapping.h"

@@ -1,44 +1,16 @@
 #include "pointdag/color/image_mapping.h"
 
-#include <OpenImageIO/imageio.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cstdio>
-#include <filesystem>
 
-#include "pointdag/container/pdag_file.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
 namespace {
 
-// OpenImageIO plugins pick the format by file name, so images go through a private temporary file.
-class TempImage {
- public:
-  explicit TempImage(ImageFormat format) {
-    std::string pattern = (std::filesystem::temp_directory_path() / "pointdag-image-XXXXXX").string();
-    const int fd = mkstemp(pattern.data());
-    if (fd >= 0) {
-      close(fd);
-      std::filesystem::remove(pattern);
-      path_ = pattern + "." + ImageFormatName(format);  // OIIO knows png, jpeg and webp by these
-    }
-  }
-  ~TempImage() {
-    std::error_code ec;
-    if (!path_.empty()) std::filesystem::remove(path_, ec);
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
-// Our own look at the image before OpenImageIO's: the format's signature, and for PNG the size
+// Our own look at the image before its library's: the format's signature, and for PNG the size
 // that deflate (at most 1032:1) can expand its bytes to. The side itself is already bound to the
 // validated color count; JPEG and WebP stop at 16384 (the encoder's limit too).
 Status CheckImageBytes(std::span<const uint8_t> image, ImageFormat format, uint64_t side) {
@@ -96,15 +68,6 @@ std::vector<Rgb8> GatherTexture(std::span<const uint8_t> pixels, Curve curve, ui
 
 const char* CurveName(Curve curve) { return curve == Curve::kMorton ? "morton" : "hilbert"; }
 
-const char* ImageFormatName(ImageFormat format) {
-  switch (format) {
-    case ImageFormat::kPng: return "png";
-    case ImageFormat::kJpeg: return "jpeg";
-    case ImageFormat::kWebp: return "webp";
-  }
-  return "?";
-}
-
 std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side) {
   if (curve == Curve::kMorton) {
     uint32_t x = 0, y = 0;
@@ -140,17 +103,7 @@ StatusOr<std::vector<uint8_t>> EncodeColorImage(std::span<const Rgb8> colors, Cu
   const uint32_t side = TextureSide(colors.size());
   if (side > kMaxLossyTextureSide && format != ImageFormat::kPng) return ResourceLimit("texture too large for JPEG/WebP");
   const std::vector<uint8_t> pixels = LayOutTexture(colors, curve, side, 3);
-  TempImage file(format);
-  if (file.path().empty()) return IoError("cannot create a temporary image file");
-  auto out = OIIO::ImageOutput::create(file.path());
-  if (!out) return Unsupported(std::string("OpenImageIO cannot write ") + ImageFormatName(format));
-  OIIO::ImageSpec spec(static_cast<int>(side), static_cast<int>(side), 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("Compression", std::string(ImageFormatName(format)) + ":" + std::to_string(quality));
-  spec.attribute("CompressionQuality", quality);
-  if (!out->open(file.path(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close()) {
-    return IoError("OpenImageIO failed to write the color image: " + out->geterror());
-  }
-  ASSIGN_OR_RETURN(std::vector<uint8_t> image, ReadFileBytes(file.path()));
+  ASSIGN_OR_RETURN(std::vector<uint8_t> image, EncodeImageFile(pixels, side, format, quality));
   std::vector<uint8_t> payload = {static_cast<uint8_t>(curve), static_cast<uint8_t>(format)};
   PutVarint(payload, side);
   payload.insert(payload.end(), image.begin(), image.end());
@@ -169,21 +122,7 @@ StatusOr<std::vector<Rgb8>> DecodeColorImage(std::span<const uint8_t> payload, u
   }
   const auto image = payload.subspan(pos);
   RETURN_IF_ERROR(CheckImageBytes(image, format, side));
-  TempImage file(format);
-  if (file.path().empty()) return IoError("cannot create a temporary image file");
-  RETURN_IF_ERROR(WriteFileAtomically(file.path(), image));
-  // The plugin of the stored format only: OpenImageIO would otherwise try every format it knows.
-  auto in = OIIO::ImageInput::create(ImageFormatName(format));
-  if (!in) return Unsupported(std::string("OpenImageIO cannot read ") + ImageFormatName(format));
-  OIIO::ImageSpec config;
-  if (!in->open(file.path(), config)) return Corrupt("color image cannot be opened: " + in->geterror());
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width < 0 || spec.height < 0 || uint64_t(spec.width) != side || uint64_t(spec.height) != side ||
-      spec.depth != 1 || spec.nchannels < 3) {
-    return Corrupt("color image has the wrong size or channels");
-  }
-  std::vector<uint8_t> pixels(side * side * 3);
-  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data())) return Corrupt("color image fails to decode: " + in->geterror());
+  ASSIGN_OR_RETURN(const std::vector<uint8_t> pixels, DecodeImageFile(image, format, static_cast<uint32_t>(side)));
   return GatherTexture(pixels, curve, static_cast<uint32_t>(side), 3, count);
 }
 

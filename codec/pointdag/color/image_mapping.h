@@ -1,7 +1,7 @@
 // Stage 5d: the 2D mapping of Paper IIA. The color array is laid along a space-filling curve
 // (Morton or Hilbert) into a square power-of-two texture, so that neighbours in the array stay
-// neighbours in the image, and the texture is coded with conventional image codecs through
-// OpenImageIO: PNG (lossless), JPEG and WebP (lossy, with their quality searched for a PSNR-Y
+// neighbours in the image, and the texture is coded with conventional image codecs
+// (image_file.h): PNG (lossless), JPEG and WebP (lossy, with their quality searched for a PSNR-Y
 // target). Texels past the last color repeat it, which costs the codecs next to nothing.
 // No random access: a reader decodes the whole image.
 #pragma once
@@ -10,16 +10,15 @@
 #include <span>
 #include <vector>
 
+#include "pointdag/color/image_file.h"
 #include "pointdag/status.h"
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag {
 
 enum class Curve : uint8_t { kMorton = 0, kHilbert = 1 };
-enum class ImageFormat : uint8_t { kPng = 0, kJpeg = 1, kWebp = 2 };
 
 const char* CurveName(Curve curve);
-const char* ImageFormatName(ImageFormat format);
 
 // Texel (x, y) of position i along the curve on a side x side texture (side a power of two).
 std::array<uint32_t, 2> CurvePosition(Curve curve, uint64_t i, uint32_t side);
