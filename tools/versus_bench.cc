@@ -83,7 +83,9 @@ nlohmann::json VersusCase(const std::filesystem::path& scan, const GpccReference
 
 int RunVersusBench(const BenchOptions& options) {
   std::vector<nlohmann::json> rows;
-  for (const auto& [name, reference] : kGpcc) {
+  for (const auto& entry : kGpcc) {  // not a structured binding: clang 14 cannot capture one
+    const std::string& name = entry.first;
+    const GpccReference& reference = entry.second;
     const std::filesystem::path scan = std::filesystem::path(options.data_dir) / name;
     if (!std::filesystem::exists(scan)) {
       std::fprintf(stderr, "bench --versus: %s is not in %s, skipped\n", name.c_str(), options.data_dir.c_str());
