@@ -1,6 +1,8 @@
 #include "pointdag/color/color_codec.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
@@ -79,6 +81,57 @@ StatusOr<EncodedColors> SearchAstcFootprint(std::span<const Rgb8> colors, const 
   return InvalidArgument("astc cannot reach " + std::to_string(*options.target_psnr_y) + " dB PSNR-Y on these colors");
 }
 
+// The block codecs' threshold for a PSNR-Y target: the largest threshold that meets it, found with
+// few full encodes (the bisection before this took 9-10 and four fifths of an encode's time).
+// Decoded PSNR-Y falls about 10 dB per decade of threshold (the blocks' MSE follows it), so the
+// first guess is 1.5 times the MSE the target allows (about where lion, guanyin and autzen meet
+// it); the next ones extrapolate along the last two encodes' slope or, once both sides are known,
+// follow a secant through the nearest passing and failing encodes, aiming a hair above the target
+// and kept inside the bracket so that a bent curve cannot stall it. It stops once a passing encode
+// is within kClose of the target, the bracket is within 1% of threshold, or after `steps` more
+// encodes; the cheapest passing encode wins. A threshold of 0 keeps every color exact (blocks of
+// identical colors only) and is the fallback when nothing else passes.
+StatusOr<EncodedColors> SearchBlockThreshold(std::span<const Rgb8> colors, ColorCodec codec, double target, int steps) {
+  constexpr double kClose = 0.02, kAim = 0.01, kLn10 = 2.302585092994046;
+  constexpr double kDefaultSlope = -10.0 / kLn10;  // dB per unit of ln(threshold)
+  const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
+  struct Point {
+    double log_t, psnr;
+  };
+  std::optional<Point> pass, fail;  // the highest passing and the lowest failing threshold so far
+  std::optional<Point> last;         // the previous encode, for the slope while one side is unknown
+  std::optional<EncodedColors> best;
+  double log_t = std::log(allowed * 1.5);
+  for (int step = 0; step <= steps; ++step) {
+    ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, codec, std::exp(log_t)));  // measured by decoding
+    const Point point{log_t, trial.psnr.y};
+    if (trial.psnr.y >= target) {
+      if (!pass || point.log_t > pass->log_t) pass = point;
+      if (!best || trial.bytes.size() <= best->bytes.size()) best = std::move(trial);
+      if (point.psnr - target < kClose) break;
+    } else if (!fail || point.log_t < fail->log_t) {
+      fail = point;
+    }
+    if (pass && fail && fail->log_t - pass->log_t < 0.01) break;
+    if (pass && fail) {
+      const double slope = (fail->psnr - pass->psnr) / (fail->log_t - pass->log_t);
+      const double width = fail->log_t - pass->log_t;
+      const double guess = slope < 0 ? pass->log_t + (target + kAim - pass->psnr) / slope : pass->log_t + width / 2;
+      log_t = std::clamp(guess, pass->log_t + 0.1 * width, fail->log_t - 0.1 * width);
+    } else {
+      const Point& from = pass ? *pass : *fail;  // extrapolate from the one side known
+      double slope = kDefaultSlope;
+      if (last && last->log_t != point.log_t) {
+        slope = std::clamp((point.psnr - last->psnr) / (point.log_t - last->log_t), 3 * kDefaultSlope, kDefaultSlope / 3);
+      }
+      log_t = from.log_t + (target + kAim - from.psnr) / slope;
+    }
+    last = point;
+  }
+  if (best) return *std::move(best);
+  return EncodeBlocksAt(colors, codec, 0);
+}
+
 }  // namespace
 
 bool IsLossy(ColorCodec codec) {
@@ -140,28 +193,7 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
 
   const double target = *options.target_psnr_y;
   if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
-  // Bracket: the per-channel MSE the target allows is a natural first guess; a threshold of 0
-  // keeps every color exact (blocks of identical colors only), so the low end always passes.
-  const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
-  double lo = 0, hi = allowed * 8;
-  ASSIGN_OR_RETURN(EncodedColors best, EncodeBlocksAt(colors, options.codec, allowed / 2));
-  if (best.psnr.y >= target) {
-    lo = allowed / 2;
-  } else {
-    hi = allowed / 2;
-    ASSIGN_OR_RETURN(best, EncodeBlocksAt(colors, options.codec, 0));
-  }
-  for (int step = 0; step < options.search_steps; ++step) {
-    const double mid = lo > 0 ? std::sqrt(lo * hi) : hi / 8;  // geometric once a passing point is known
-    ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, options.codec, mid));
-    if (trial.psnr.y >= target) {
-      lo = mid;
-      if (trial.bytes.size() <= best.bytes.size()) best = std::move(trial);
-    } else {
-      hi = mid;
-    }
-  }
-  return best;
+  return SearchBlockThreshold(colors, options.codec, target, options.search_steps);
 }
 
 }  // namespace pointdag
