@@ -47,9 +47,11 @@ struct EncodedColors {
 };
 
 // `morton`: the voxels' Morton codes when `colors` are one per voxel in Morton order (leaf mode),
-// else empty; the lossless codec predicts from neighbours found by them.
+// else empty; the lossless codec predicts from neighbours found by them. `judged`: the indices of
+// the colors that the target and the reported PSNR are measured on (mipmap mode: the voxels, not
+// the internal nodes' colors), each below colors.size(); empty: all of them.
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,
-                                     std::span<const uint64_t> morton = {});
+                                     std::span<const uint64_t> morton = {}, std::span<const uint64_t> judged = {});
 
 // Color indices are 32-bit in the block codec and the DAG's counts: the most a section may hold.
 constexpr uint64_t kMaxColors = uint64_t{1} << 32;
