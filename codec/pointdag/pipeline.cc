@@ -36,22 +36,12 @@ Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
   start = std::chrono::steady_clock::now();
   if (out.grid.has_color()) {
     if (options.mipmap) {
-      // The target is asked of the voxels' colors; node colors ride along. A search over every
-      // node may land a little under it on the voxels alone: then aim higher by the shortfall.
+      // The target is asked of the voxels' colors (node colors ride along): the search measures
+      // only those, so one search meets it (a search over every node's colors landed under it on
+      // the voxels and had to be repeated with a higher target).
       const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
       const std::vector<uint64_t> voxel_nodes = MipVoxelIndices(out.grid.morton, out.grid.depth);
-      ColorEncodeOptions aim = options.colors;
-      for (int attempt = 0;; ++attempt) {
-        ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, aim));
-        if (!aim.target_psnr_y || !IsLossy(aim.codec) || attempt == 3) break;
-        ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(out.colors.bytes, mip.colors.size()));
-        std::vector<Rgb8> voxels;
-        voxels.reserve(voxel_nodes.size());
-        for (uint64_t i : voxel_nodes) voxels.push_back(decoded[i]);
-        const double shortfall = *options.colors.target_psnr_y - MeasureColorPsnr(out.grid.colors, voxels).y;
-        if (shortfall <= 0) break;
-        *aim.target_psnr_y += shortfall + 0.25;
-      }
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors, {}, voxel_nodes));
     } else {
       ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors, out.grid.morton));
     }

@@ -65,6 +65,24 @@ StatusOr<EncodedScan> EncodeAutzenAt4Feet() {
   return EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
 }
 
+// Mipmap mode at a target: the voxels' own colors meet it (decoded from the file), and the
+// reported PSNR is theirs, not that of every node's color.
+TEST(Pipeline, MipmapTargetIsMetOnTheVoxels) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  options.mipmap = true;
+  options.colors = {ColorCodec::kVariableRate, 38.0};
+  auto encoded = EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+  auto decoded = DecodePdag(*ParsePdag(SerializePdag(encoded->file)));
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  const ColorPsnr voxels = MeasureColorPsnr(encoded->grid.colors, decoded->grid.colors);
+  EXPECT_GE(voxels.y, 38.0);
+  EXPECT_LT(voxels.y, 38.5) << "the search aims at the target, not far above it";
+  EXPECT_DOUBLE_EQ(encoded->colors.psnr.y, voxels.y);
+}
+
 TEST(Pipeline, MetadataCarriesSourceCrsAndCodec) {
   SKIP_WITHOUT_DATA();
   auto encoded = EncodeAutzenAt4Feet();

@@ -1,11 +1,16 @@
 #include <gtest/gtest.h>
 #include <xxhash.h>
 
+#include <unistd.h>
+
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <random>
 
 #include "pointdag/color/block_codec.h"
+#include "pointdag/gpu/calibration_cache.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/dag_hashes.h"
 #include "pointdag/gpu/stage_device.h"
@@ -18,17 +23,29 @@
 namespace pointdag::gpu {
 namespace {
 
-// Sets POINTDAG_DEVICE for one test and makes the process choose again.
+// Sets POINTDAG_DEVICE for one test and makes the process choose again, with an empty calibration
+// cache of its own (XDG_CACHE_HOME), so that no earlier run's timings decide.
 class DeviceEnv {
  public:
   explicit DeviceEnv(const char* value) {
+    static int serial = 0;
+    cache_home_ = std::filesystem::temp_directory_path() /
+                  ("pointdag_gpu_test_" + std::to_string(getpid()) + "_" + std::to_string(serial++));
+    setenv("XDG_CACHE_HOME", cache_home_.c_str(), 1);
     setenv("POINTDAG_DEVICE", value, 1);
     ResetProcessDevice();
   }
   ~DeviceEnv() {
     unsetenv("POINTDAG_DEVICE");
+    unsetenv("XDG_CACHE_HOME");
     ResetProcessDevice();
+    std::filesystem::remove_all(cache_home_);
   }
+  // Another process on the same machine: same cache, choices made again.
+  static void NextProcess() { ResetProcessDevice(); }
+
+ private:
+  std::filesystem::path cache_home_;
 };
 
 TEST(DeviceChoice, ParsesTheThreeWordsAndRefusesOthers) {
@@ -103,6 +120,55 @@ TEST(DeviceChoice, ColorBlocksCalibrationMeasuresBothPaths) {
   ASSERT_EQ(choices.size(), 1u);
   EXPECT_EQ(choices[0].vulkan, *device != nullptr);
   EXPECT_EQ(choices[0].reason.rfind("measured: cpu ", 0), 0u) << choices[0].reason;
+}
+
+// A later process reads the first one's calibration instead of measuring again.
+TEST(CalibrationCache, ASecondProcessReadsTheFirstOnesTiming) {
+  DeviceEnv env("auto");
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok() && *device) << "needs a Vulkan device (lavapipe at least)";
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.020, 0.010)), *device);
+  DeviceEnv::NextProcess();
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, NotCalled), *device);
+  EXPECT_EQ(DescribeDevices(), "color_blocks: vulkan (" + (*device)->device_name() + ") (cached: cpu 20.0 ms, vulkan 10.0 ms on " +
+                                   (*device)->device_name() + ")");
+  // Each stage has its own line; another device or build has its own key.
+  EXPECT_EQ(*DeviceFor(Stage::kVoxelize, Measured(0.010, 0.020)), nullptr);
+  const std::string key = CalibrationKey((*device)->device_key());
+  EXPECT_EQ(LoadCalibration(CalibrationCachePath(), key, Stage::kColorBlocks)->vulkan_seconds, 0.010);
+  EXPECT_EQ(LoadCalibration(CalibrationCachePath(), key, Stage::kVoxelize)->vulkan_seconds, 0.020);
+  EXPECT_FALSE(LoadCalibration(CalibrationCachePath(), "another device", Stage::kColorBlocks));
+}
+
+// A corrupt file is ignored (the stage is measured again) and rewritten with the new timing.
+TEST(CalibrationCache, ACorruptFileIsMeasuredAgainAndRewritten) {
+  DeviceEnv env("auto");
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok() && *device) << "needs a Vulkan device (lavapipe at least)";
+  const std::filesystem::path file = CalibrationCachePath();
+  const std::string key = CalibrationKey((*device)->device_key());
+  std::filesystem::create_directories(file.parent_path());
+  std::ofstream(file) << "\x01garbage\n" << key << "\tcolor_blocks\tnan\t0.5\n" << key << "\tcolor_blocks\t0.1\n";
+  EXPECT_FALSE(LoadCalibration(file, key, Stage::kColorBlocks));
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.020, 0.010)), *device);
+  EXPECT_EQ(StageChoices()[0].reason.rfind("measured: ", 0), 0u);
+  const auto stored = LoadCalibration(file, key, Stage::kColorBlocks);
+  ASSERT_TRUE(stored);
+  EXPECT_EQ(stored->cpu_seconds, 0.020);
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find("garbage"), std::string::npos);
+}
+
+// A failed calibration is not cached: the next process tries again.
+TEST(CalibrationCache, AFailedCalibrationIsNotCached) {
+  DeviceEnv env("auto");
+  auto device = ProcessDevice();
+  ASSERT_TRUE(device.ok() && *device) << "needs a Vulkan device (lavapipe at least)";
+  const auto failing = [](VulkanContext&) -> StatusOr<StageTiming> { return Internal("lost the device"); };
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, failing), nullptr);
+  DeviceEnv::NextProcess();
+  EXPECT_EQ(*DeviceFor(Stage::kColorBlocks, Measured(0.020, 0.010)), *device);
 }
 
 TEST(ColorBlocksKernel, EqualColorsGiveOneZeroBitBlockPerMacroBlock) {

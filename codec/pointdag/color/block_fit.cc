@@ -30,7 +30,8 @@ void Shrink(int64_t v[3]) {
   for (int k = 0; k < 3; ++k) v[k] >>= shift;
 }
 
-// ChooseWeight and Interpolate for one pair of endpoints, with the divisions done by multiplying:
+// ChooseWeight and Interpolate for one pair of endpoints, with the divisions done by multiplying (and
+// Interpolate's by a table of the 2^bits colors):
 // by a compile-time m, and by 1 / (2 |B - A|^2) with a nudge that keeps the floor exact (the
 // numerator is below 2^26 and the denominator below 2^19, so a quotient that is not an integer is
 // at least 2^-19 from one, and the product's error is below 2^-47).
@@ -42,6 +43,8 @@ class Rebuilder {
   explicit Rebuilder(const Endpoints& e) : e_(e), d_{e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b} {
     len2_ = d_[0] * d_[0] + d_[1] * d_[1] + d_[2] * d_[2];
     inverse_ = len2_ ? 1.0 / (2.0 * len2_) : 0.0;
+    const auto mix = [](uint32_t a, uint32_t b, uint32_t w) { return static_cast<uint8_t>((a * (kM - w) + b * w + kM / 2) / kM); };
+    for (uint32_t w = 0; w <= kM; ++w) palette_[w] = {mix(e.a.r, e.b.r, w), mix(e.a.g, e.b.g, w), mix(e.a.b, e.b.b, w)};
   }
 
   uint32_t Weight(const Rgb8& c) const {
@@ -51,16 +54,14 @@ class Rebuilder {
     return static_cast<uint32_t>(double(2 * kM * dot + len2_) * inverse_ + 0x1p-25);
   }
 
-  Rgb8 Color(uint32_t w) const {
-    const auto mix = [w](uint32_t a, uint32_t b) { return static_cast<uint8_t>((a * (kM - w) + b * w + kM / 2) / kM); };
-    return {mix(e_.a.r, e_.b.r), mix(e_.a.g, e_.b.g), mix(e_.a.b, e_.b.b)};
-  }
+  Rgb8 Color(uint32_t w) const { return palette_[w]; }
 
  private:
   Endpoints e_;
   int32_t d_[3];
   int32_t len2_;
   double inverse_;
+  std::array<Rgb8, kM + 1> palette_;  // Interpolate for every weight, computed once per endpoints
 };
 
 // Weights and error for `ends`, then endpoints refined by least squares for those weights

@@ -4,8 +4,8 @@
 // residuals: lossless_context.h; version 1, planar differences in zstd, is still read), the
 // block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB), and the 2D mapping of Paper IIA through
 // image codecs: "png" (lossless), "jpeg", "webp", and the GPU texture format "astc". A target
-// PSNR-Y makes the encoder search the block codecs' MSE threshold (bisection on its logarithm), the
-// image codecs' quality (bisection on 1..100) or ASTC's footprint (cheapest first), keeping the
+// PSNR-Y makes the encoder search the block codecs' MSE threshold (a secant search on its logarithm,
+// 2-6 encodes), the image codecs' quality (bisection on 1..100) or ASTC's footprint (cheapest first), keeping the
 // cheapest setting whose decoded colors still meet the target: the target
 // is met by measurement, not prediction. The stored section starts with the codec's id byte
 // (proto/PDAG_FORMAT.md §3).
@@ -33,7 +33,7 @@ struct ColorEncodeOptions {
   Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
   int image_quality = 90;               // jpeg/webp when no target is given
   int astc_footprint = 6;               // astc when no target is given
-  int search_steps = 8;                 // block codecs: refinements of the threshold after bracketing
+  int search_steps = 8;                 // block codecs: most encodes after the first guess
 };
 
 bool IsLossy(ColorCodec codec);
@@ -47,9 +47,11 @@ struct EncodedColors {
 };
 
 // `morton`: the voxels' Morton codes when `colors` are one per voxel in Morton order (leaf mode),
-// else empty; the lossless codec predicts from neighbours found by them.
+// else empty; the lossless codec predicts from neighbours found by them. `judged`: the indices of
+// the colors that the target and the reported PSNR are measured on (mipmap mode: the voxels, not
+// the internal nodes' colors), each below colors.size(); empty: all of them.
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,
-                                     std::span<const uint64_t> morton = {});
+                                     std::span<const uint64_t> morton = {}, std::span<const uint64_t> judged = {});
 
 // Color indices are 32-bit in the block codec and the DAG's counts: the most a section may hold.
 constexpr uint64_t kMaxColors = uint64_t{1} << 32;

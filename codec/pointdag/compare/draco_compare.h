@@ -18,6 +18,9 @@ struct DracoResult {
   double bits_per_point = 0;
   std::string method;  // "kd-tree" or "sequential"
   int speed = 0;
+  // One encode with the kd-tree coder at speed 0 (draco_encoder -cl 10; its -qp 11 is moot for
+  // integer voxel coordinates), the yardstick for our encode speed; Draco is single-threaded.
+  double level10_seconds = 0;
 };
 
 // kExhaustive: every method and speed, the smallest kept (the scorecard). kBestLevel: the kd-tree

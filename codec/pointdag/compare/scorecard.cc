@@ -69,7 +69,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
                     {"d1_psnr", finite_or_null(original.d1_psnr())},
                     {"psnr_y_voxel_colors", finite_or_null(original.ColorPsnrY(scan.grid.colors))}}},
       {"draco_bits_per_point", draco.bits_per_point},
-      {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}}},
+      {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}, {"level10_encode_s", draco.level10_seconds}}},
       {"codecs", codecs},
   };
 }

@@ -6,6 +6,8 @@
 #include <memory>
 #include <mutex>
 
+#include "pointdag/gpu/calibration_cache.h"
+
 namespace pointdag::gpu {
 namespace {
 
@@ -98,14 +100,21 @@ StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate, bo
     made.reason = "no usable Vulkan device: " + s.open_error.message();
   } else if (s.choice == DeviceChoice::kVulkan) {
     made = {stage, true, context->device_name(), "POINTDAG_DEVICE=vulkan", {}};
-  } else if (auto timing = calibrate(*context); !timing.ok()) {
-    made.reason = "the Vulkan path failed its calibration run: " + timing.status().message();
   } else {
-    made.timing = *timing;
-    made.vulkan = timing->vulkan_seconds < timing->cpu_seconds;
-    if (made.vulkan) made.device = context->device_name();
-    made.reason = "measured: cpu " + Milliseconds(timing->cpu_seconds) + ", vulkan " + Milliseconds(timing->vulkan_seconds) +
-                  " on " + context->device_name();
+    const std::filesystem::path cache = CalibrationCachePath();
+    const std::string key = CalibrationKey(context->device_key());
+    std::optional<StageTiming> cached = LoadCalibration(cache, key, stage);
+    StatusOr<StageTiming> timing = cached ? StatusOr<StageTiming>(*cached) : calibrate(*context);
+    if (!timing.ok()) {
+      made.reason = "the Vulkan path failed its calibration run: " + timing.status().message();
+    } else {
+      if (!cached) StoreCalibration(cache, key, stage, *timing);
+      made.timing = *timing;
+      made.vulkan = timing->vulkan_seconds < timing->cpu_seconds;
+      if (made.vulkan) made.device = context->device_name();
+      made.reason = std::string(cached ? "cached: " : "measured: ") + "cpu " + Milliseconds(timing->cpu_seconds) + ", vulkan " +
+                    Milliseconds(timing->vulkan_seconds) + " on " + context->device_name();
+    }
   }
   s.stages[stage] = made;
   return made.vulkan ? context : nullptr;

@@ -4,7 +4,7 @@
 // best device (a discrete GPU, then an integrated one, then a virtual one, then Mesa lavapipe on the
 // CPU) and is an error with a clear message when no device opens; `auto` (the default) opens the
 // best device and then, once per stage, times both paths on a small synthetic input and keeps the
-// faster. Under `auto` without a usable device the process says so once (stderr) and uses the CPU.
+// faster (the timing is cached per machine: calibration_cache.h). Under `auto` without a usable device the process says so once (stderr) and uses the CPU.
 // Both paths give identical results (tests/gpu/gpu_test.cc), so the choice only changes speed.
 #pragma once
 
@@ -40,7 +40,8 @@ struct StageTiming {
 using Calibration = std::function<StatusOr<StageTiming>(VulkanContext&)>;
 
 // The device `stage` runs on, null for the CPU path. Under `auto`, `calibrate` decides, once per
-// process; a calibration that fails leaves the stage on the CPU. Under `auto` an input smaller than
+// machine, device and build: its timing is cached (calibration_cache.h) and read back by later
+// processes; a calibration that fails leaves the stage on the CPU (and is not cached). Under `auto` an input smaller than
 // the calibration's (`small_input`) stays on the CPU too: the measurement says nothing about it, and
 // a dispatch's fixed cost dominates it (thousands of one-voxel tiles took ~100 ms each on lavapipe).
 StatusOr<VulkanContext*> DeviceFor(Stage stage, const Calibration& calibrate, bool small_input = false);
@@ -54,7 +55,8 @@ struct StageChoice {
 };
 std::vector<StageChoice> StageChoices();  // the stages decided so far, in Stage order
 
-// One line for logs: "color_blocks: cpu (measured: cpu 10.2 ms, vulkan 88.1 ms on llvmpipe ...)".
+// One line for logs: "color_blocks: cpu (measured: cpu 10.2 ms, vulkan 88.1 ms on llvmpipe ...)"
+// ("cached: ..." where an earlier process measured it).
 std::string DescribeDevices();
 
 // Tests and benchmarks: forget the process's choices so that the next call reads POINTDAG_DEVICE

@@ -139,6 +139,8 @@ StatusOr<std::unique_ptr<VulkanContext>> VulkanContext::Create() {
   }
   std::unique_ptr<VulkanContext> out(new VulkanContext(std::move(impl)));
   out->device_name_ = chosen.deviceName;
+  out->device_key_ = out->device_name_ + " / driver " + std::to_string(chosen.driverVersion) + " / " +
+                     std::to_string(chosen.vendorID) + ":" + std::to_string(chosen.deviceID);
   out->software_ = chosen.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   return out;
 }

@@ -61,6 +61,8 @@ class VulkanContext {
 
   const std::string& device_name() const { return device_name_; }
   bool software() const { return software_; }  // a CPU implementation (lavapipe)
+  // Name, driver version and vendor:device ids: what a cached calibration must match.
+  const std::string& device_key() const { return device_key_; }
 
   StatusOr<Buffer> CreateBuffer(size_t bytes);
   StatusOr<const Kernel*> GetKernel(std::string_view name, std::span<const uint32_t> spirv, uint32_t buffers, uint32_t push_bytes);
@@ -73,7 +75,7 @@ class VulkanContext {
   struct Impl;
   explicit VulkanContext(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
-  std::string device_name_;
+  std::string device_name_, device_key_;
   bool software_ = false;
   std::mutex mutex_;  // one queue: submissions from tbb workers take turns
 };
