@@ -154,6 +154,9 @@ int main(int argc, char** argv) {
     // An ingest cannot be interrupted midway; its job resumes from the upload on the next start,
     // and SQLite's WAL makes leaving now as safe as a crash.
     spdlog::info("leaving with {} job(s) running: they resume on the next start", jobs.running());
+    // A job that has just committed its dataset may not have removed its upload yet: leave no
+    // orphan behind for `pointdagd --check` (the running ones' uploads and spill files stay).
+    (void)SweepLeftovers(**store, config.data_dir, /*keep_spill=*/true);
     std::_Exit(0);
   }
   return 0;

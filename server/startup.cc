@@ -30,7 +30,7 @@ Status CheckExposure(const DaemonConfig& config, bool no_token) {
                          "token_file, --token, --token-file or POINTDAGD_TOKEN) or pass --no-token to mean it");
 }
 
-size_t SweepLeftovers(Store& store, const std::filesystem::path& data_dir) {
+size_t SweepLeftovers(Store& store, const std::filesystem::path& data_dir, bool keep_spill) {
   // By file name: the data folder may be spelt differently from one start to the next.
   std::set<std::filesystem::path> in_use;
   const auto jobs = store.JobsInStates({"queued", "running"});
@@ -41,8 +41,10 @@ size_t SweepLeftovers(Store& store, const std::filesystem::path& data_dir) {
   }
   size_t removed = 0;
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(data_dir / "spill", ec)) {
-    removed += std::filesystem::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+  if (!keep_spill) {
+    for (const auto& entry : std::filesystem::directory_iterator(data_dir / "spill", ec)) {
+      removed += std::filesystem::remove_all(entry.path(), ec) > 0 ? 1 : 0;
+    }
   }
   if (!jobs.ok()) return removed;  // which uploads are in use is unknown: keep them all
   for (const auto& entry : std::filesystem::directory_iterator(data_dir / "uploads", ec)) {
