@@ -23,7 +23,7 @@
 
 namespace pointdag {
 
-enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1 };
+enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2 };
 const char* GeometryCoderName(GeometryCoder coder);
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder);

@@ -1,0 +1,235 @@
+#include "pointdag/dag/spatial_coder.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <memory>
+
+#include "pointdag/entropy/adaptive_codes.h"
+#include "pointdag/voxelize/morton.h"
+
+namespace pointdag {
+namespace {
+
+// Classes by height: 1 = voxel masks of brick cells, 2 = brick cell masks, 3.. = internal nodes.
+constexpr int kClasses = kMaxDepth + 1;
+// Mask bit context: set bits so far (0..3), known lower neighbours on the child level (3 bits),
+// the parent's neighbours touching the child (3 bits).
+constexpr int kMaskContexts = 4 * 8 * 8;
+
+struct SpatialModels {
+  std::array<std::array<BitModel, kMaskContexts>, kClasses> mask;
+  std::array<BitModel, kClasses> flag;
+  std::array<GammaModel, kClasses> ref;
+};
+
+// The cells of one level that the coder visits, in Morton order.
+struct Level {
+  std::vector<uint32_t> id;     // node ordinal (internal), brick index, or brick * 8 + cell
+  std::vector<uint8_t> first;   // first occurrence: its mask and children are coded here
+  std::vector<uint8_t> mask;    // filled as the level is coded
+  std::vector<std::array<int32_t, 6>> nbr;  // -x, +x, -y, +y, -z, +z on this level; -1: empty or unknown
+  std::vector<uint32_t> kids;   // internal first occurrences: where their children start in DagArrays::children
+  size_t size() const { return id.size(); }
+  void Add(uint32_t node, bool is_first, const std::array<int32_t, 6>& n) {
+    id.push_back(node);
+    first.push_back(is_first ? 1 : 0);
+    nbr.push_back(n);
+  }
+};
+
+int Rank(unsigned mask, int bit) { return std::popcount(mask & ((1u << bit) - 1)); }
+
+class EncoderIo {
+ public:
+  static constexpr bool kEncoding = true;
+  int Bit(BitModel& m, int truth) {
+    rc_.Encode(m, truth);
+    return truth;
+  }
+  uint32_t Ref(GammaModel& m, uint32_t truth, uint32_t bound) {
+    EncodeGamma(rc_, m, truth + 1, std::bit_width(bound));
+    return truth;
+  }
+  bool failed() const { return false; }
+  std::vector<uint8_t> Finish() { return rc_.Finish(); }
+
+ private:
+  BinaryRangeEncoder rc_;
+};
+
+class DecoderIo {
+ public:
+  static constexpr bool kEncoding = false;
+  explicit DecoderIo(std::span<const uint8_t> payload) : rc_(payload) {}
+  int Bit(BitModel& m, int) { return rc_.Decode(m); }
+  uint32_t Ref(GammaModel& m, uint32_t, uint32_t bound) { return DecodeGamma(rc_, m, std::bit_width(bound)) - 1; }
+  bool failed() const { return rc_.overrun(); }
+
+ private:
+  BinaryRangeDecoder rc_;
+};
+
+// Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is implied.
+template <typename Io>
+uint8_t CodeMask(Io& io, std::array<BitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth) {
+  unsigned lower_mask[3], lower_exists = 0, upper_exists = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int32_t lo = lv.nbr[i][2 * axis];
+    lower_mask[axis] = lo >= 0 ? lv.mask[lo] : 0;
+    lower_exists |= (lo >= 0 ? 1u : 0u) << axis;
+    upper_exists |= (lv.nbr[i][2 * axis + 1] >= 0 ? 1u : 0u) << axis;
+  }
+  unsigned m = 0;
+  for (int c = 0; c < 8; ++c) {
+    int bit = 1;
+    if (c < 7 || m != 0) {
+      unsigned lower = 0, outer = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const int a = 4 >> axis;
+        if (c & a) {
+          lower |= ((m >> (c ^ a)) & 1u) << axis;  // lower sibling
+          outer |= upper_exists & (1u << axis);
+        } else {
+          lower |= ((lower_mask[axis] >> (c | a)) & 1u) << axis;  // in the lower neighbour
+          outer |= lower_exists & (1u << axis);
+        }
+      }
+      const unsigned ctx = std::min(std::popcount(m), 3) << 6 | lower << 3 | outer;
+      bit = io.Bit(models[ctx], (truth >> c) & 1);
+    }
+    m |= static_cast<unsigned>(bit) << c;
+  }
+  return static_cast<uint8_t>(m);
+}
+
+// The next level's cells: the children of the cells expanded here, with their neighbours.
+Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
+  std::vector<int32_t> base(cur.size(), -1);
+  int32_t total = 0;
+  for (size_t i = 0; i < cur.size(); ++i) {
+    if (level >= levels || cur.first[i]) {
+      base[i] = total;
+      total += std::popcount(static_cast<unsigned>(cur.mask[i]));
+    }
+  }
+  Level next;
+  next.id.reserve(total);
+  next.first.reserve(total);
+  next.nbr.reserve(total);
+  uint32_t fresh = 0;  // new ordinals assigned so far: ordinals are numbered in this order
+  for (size_t i = 0; i < cur.size(); ++i) {
+    if (base[i] < 0) continue;
+    const unsigned mask = cur.mask[i];
+    for (int c = 0, r = 0; c < 8; ++c) {
+      if (!((mask >> c) & 1u)) continue;
+      uint32_t id;
+      bool is_first;
+      if (level < levels) {
+        id = a.children[level][cur.kids[i] + r];
+        is_first = id == fresh;
+        if (is_first) ++fresh;
+      } else {
+        id = cur.id[i] * 8 + static_cast<uint32_t>(c);
+        is_first = cur.first[i];
+      }
+      ++r;
+      std::array<int32_t, 6> n;
+      for (int d = 0; d < 6; ++d) {
+        const int bit = 4 >> (d / 2);
+        const bool inside = (d & 1) ? !(c & bit) : (c & bit);
+        const int sib = c ^ bit;
+        const int32_t owner = inside ? static_cast<int32_t>(i) : cur.nbr[i][d];
+        n[d] = owner >= 0 && base[owner] >= 0 && ((cur.mask[owner] >> sib) & 1u)
+                   ? base[owner] + Rank(cur.mask[owner], sib)
+                   : -1;
+      }
+      next.Add(id, is_first, n);
+    }
+  }
+  return next;
+}
+
+// One walk for both directions: the encoder's arrays are complete, the decoder's fill as it goes.
+template <typename Io, typename Arrays>
+Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts) {
+  const int levels = depth - 2;
+  auto models = std::make_unique<SpatialModels>();
+  std::vector<uint8_t> brick_cells(a.leaves.size());
+  for (size_t b = 0; b < a.leaves.size(); ++b) {
+    for (int c = 0; c < 8; ++c) brick_cells[b] |= static_cast<uint8_t>(((a.leaves[b] >> (8 * c)) & 0xFFu) ? 1u << c : 0u);
+  }
+  const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
+    if (level < levels) return a.masks[level][id];
+    if (level == levels) return brick_cells[id];
+    return static_cast<uint8_t>(a.leaves[id >> 3] >> (8 * (id & 7)));
+  };
+  Level cur;
+  cur.Add(0, true, {-1, -1, -1, -1, -1, -1});
+  for (int level = 0; level < depth; ++level) {
+    const int height = depth - level;
+    cur.mask.assign(cur.size(), 0);
+    cur.kids.assign(cur.size(), 0);
+    uint32_t seen = 0;  // nodes of the next level referenced so far
+    size_t child = 0;   // encoder: position in a.children[level]
+    for (size_t i = 0; i < cur.size(); ++i) {
+      const uint32_t id = cur.id[i];
+      if (!cur.first[i]) {
+        cur.mask[i] = known_mask(level, id);
+        continue;
+      }
+      const uint8_t mask = CodeMask(io, models->mask[height], cur, i, Io::kEncoding ? known_mask(level, id) : 0);
+      cur.mask[i] = mask;
+      if constexpr (!Io::kEncoding) {
+        if (level < levels) a.masks[level].push_back(mask);
+        if (level == levels) brick_cells[id] = mask;
+        if (level > levels) a.leaves[id >> 3] |= uint64_t{mask} << (8 * (id & 7));
+      }
+      if (level >= levels) continue;
+      cur.kids[i] = static_cast<uint32_t>(Io::kEncoding ? child : a.children[level].size());
+      for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
+        const uint32_t truth = Io::kEncoding ? a.children[level][child++] : 0;
+        uint32_t k;
+        if (seen > 0 && io.Bit(models->flag[height], truth < seen ? 1 : 0)) {
+          k = io.Ref(models->ref[height], truth, seen);
+          if (k >= seen) return Corrupt("geometry stream refers to a node not yet seen");
+        } else {
+          k = seen++;
+          if (seen > counts[level + 1]) return Corrupt("geometry stream holds more nodes than its header declares");
+        }
+        if constexpr (!Io::kEncoding) a.children[level].push_back(k);
+      }
+    }
+    if (io.failed()) return Truncated("geometry stream ends early");
+    if (level < levels && seen != counts[level + 1]) {
+      return Corrupt("geometry stream holds fewer nodes than its header declares");
+    }
+    if (level + 1 < depth) cur = Expand(cur, level, levels, a);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth) {
+  EncoderIo io;
+  std::vector<uint64_t> counts;
+  for (const auto& m : arrays.masks) counts.push_back(m.size());
+  counts.push_back(arrays.leaves.size());
+  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts));
+  return io.Finish();
+}
+
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts) {
+  const int levels = depth - 2;
+  DagArrays a;
+  a.masks.resize(levels);
+  a.children.resize(levels);
+  for (int level = 0; level < levels; ++level) a.masks[level].reserve(counts[level]);
+  a.leaves.assign(counts[levels], 0);
+  DecoderIo io(payload);
+  RETURN_IF_ERROR(Traverse(io, a, depth, counts));
+  return a;
+}
+
+}  // namespace pointdag
