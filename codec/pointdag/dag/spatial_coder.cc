@@ -13,12 +13,14 @@ namespace {
 
 // Classes by height: 1 = voxel masks of brick cells, 2 = brick cell masks, 3.. = internal nodes.
 constexpr int kClasses = kMaxDepth + 1;
-// Mask bit context: set bits so far (0..3), known lower neighbours on the child level (3 bits),
-// the parent's neighbours touching the child (3 bits).
-constexpr int kMaskContexts = 4 * 8 * 8;
+// Mask bit context: set bits so far (0..3); the known lower neighbours on the child's level (3 bits);
+// per axis, whether the parent's neighbour on the child's side exists, else whether the one on the
+// other side does (3 states). Measured: the child's octant, the full 6-neighbour pattern or a count
+// of the known cells around the child dilute the statistics (+0.3..3% on lion, autzen, milk).
+constexpr int kMaskContexts = 4 * 8 * 27;
 
 struct SpatialModels {
-  std::array<std::array<BitModel, kMaskContexts>, kClasses> mask;
+  std::array<std::array<YoungBitModel, kMaskContexts>, kClasses> mask;
   std::array<BitModel, kClasses> flag;
   std::array<GammaModel, kClasses> ref;
 };
@@ -43,7 +45,8 @@ int Rank(unsigned mask, int bit) { return std::popcount(mask & ((1u << bit) - 1)
 class EncoderIo {
  public:
   static constexpr bool kEncoding = true;
-  int Bit(BitModel& m, int truth) {
+  template <typename Model>
+  int Bit(Model& m, int truth) {
     rc_.Encode(m, truth);
     return truth;
   }
@@ -62,7 +65,8 @@ class DecoderIo {
  public:
   static constexpr bool kEncoding = false;
   explicit DecoderIo(std::span<const uint8_t> payload) : rc_(payload) {}
-  int Bit(BitModel& m, int) { return rc_.Decode(m); }
+  template <typename Model>
+  int Bit(Model& m, int) { return rc_.Decode(m); }
   uint32_t Ref(GammaModel& m, uint32_t, uint32_t bound) { return DecodeGamma(rc_, m, std::bit_width(bound)) - 1; }
   bool failed() const { return rc_.overrun(); }
 
@@ -72,7 +76,7 @@ class DecoderIo {
 
 // Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is implied.
 template <typename Io>
-uint8_t CodeMask(Io& io, std::array<BitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth) {
+uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth) {
   unsigned lower_mask[3], lower_exists = 0, upper_exists = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const int32_t lo = lv.nbr[i][2 * axis];
@@ -84,18 +88,24 @@ uint8_t CodeMask(Io& io, std::array<BitModel, kMaskContexts>& models, const Leve
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
-      unsigned lower = 0, outer = 0;
+      unsigned lower = 0, sides = 0;
       for (int axis = 0; axis < 3; ++axis) {
         const int a = 4 >> axis;
+        const unsigned here = 1u << axis;
+        // The parent's neighbour on the child's side (outer) and on the other side (opposite).
+        unsigned outer, opposite;
         if (c & a) {
           lower |= ((m >> (c ^ a)) & 1u) << axis;  // lower sibling
-          outer |= upper_exists & (1u << axis);
+          outer = upper_exists & here;
+          opposite = lower_exists & here;
         } else {
           lower |= ((lower_mask[axis] >> (c | a)) & 1u) << axis;  // in the lower neighbour
-          outer |= lower_exists & (1u << axis);
+          outer = lower_exists & here;
+          opposite = upper_exists & here;
         }
+        sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
       }
-      const unsigned ctx = std::min(std::popcount(m), 3) << 6 | lower << 3 | outer;
+      const unsigned ctx = (std::min(std::popcount(m), 3) * 8 + lower) * 27 + sides;
       bit = io.Bit(models[ctx], (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;

@@ -4,6 +4,7 @@
 // corrupt input decodes to garbage that the caller's structural checks reject, never to a crash.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -26,9 +27,26 @@ struct BitModel {
   }
 };
 
+// A BitModel that learns fast while young: both estimates move by 1/(n+2) after n updates until
+// that is slower than their own rates. Suits many sparse contexts (the geometry's neighbour contexts).
+struct YoungBitModel {
+  uint16_t fast = 32768, slow = 32768;
+  uint8_t n = 0;
+  uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }
+  void Update(int bit) {
+    const int32_t target = bit ? 0 : 65535;
+    const int32_t young = 65536 / (n + 2);
+    const int32_t f = std::max(young, 65536 >> 4), s = std::max(young, 65536 >> 7);
+    fast = static_cast<uint16_t>(fast + (((target - fast) * f) >> 16));
+    slow = static_cast<uint16_t>(slow + (((target - slow) * s) >> 16));
+    if (n < 255) ++n;
+  }
+};
+
 class BinaryRangeEncoder {
  public:
-  void Encode(BitModel& m, int bit) {
+  template <typename Model>
+  void Encode(Model& m, int bit) {
     const uint32_t bound = (range_ >> 12) * m.P0();
     if (bit == 0) {
       range_ = bound;
@@ -85,7 +103,8 @@ class BinaryRangeDecoder {
   explicit BinaryRangeDecoder(std::span<const uint8_t> in) : in_(in) {
     for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
   }
-  int Decode(BitModel& m) {
+  template <typename Model>
+  int Decode(Model& m) {
     const uint32_t bound = (range_ >> 12) * m.P0();
     int bit;
     if (code_ < bound) {
