@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <memory>
+#include <unordered_map>
 
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/voxelize/morton.h"
@@ -135,7 +136,10 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
       if (!((mask >> c) & 1u)) continue;
       uint32_t id;
       bool is_first;
-      if (level < levels) {
+      if (level + 1 == levels) {
+        id = cur.kids[i] + static_cast<uint32_t>(r);  // brick slot
+        is_first = true;
+      } else if (level < levels) {
         id = a.children[level][cur.kids[i] + r];
         is_first = id == fresh;
         if (is_first) ++fresh;
@@ -161,18 +165,18 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
 }
 
 // One walk for both directions: the encoder's arrays are complete, the decoder's fill as it goes.
+// Bricks carry no back-references: every brick slot (a child of a new node of the last internal
+// level) is coded in full, `slots` holding its value, and the decoder merges equal bricks.
 template <typename Io, typename Arrays>
-Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts) {
+Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots) {
   const int levels = depth - 2;
   auto models = std::make_unique<SpatialModels>();
-  std::vector<uint8_t> brick_cells(a.leaves.size());
-  for (size_t b = 0; b < a.leaves.size(); ++b) {
-    for (int c = 0; c < 8; ++c) brick_cells[b] |= static_cast<uint8_t>(((a.leaves[b] >> (8 * c)) & 0xFFu) ? 1u << c : 0u);
-  }
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
     if (level < levels) return a.masks[level][id];
-    if (level == levels) return brick_cells[id];
-    return static_cast<uint8_t>(a.leaves[id >> 3] >> (8 * (id & 7)));
+    if (level > levels) return static_cast<uint8_t>(slots[id >> 3] >> (8 * (id & 7)));
+    uint8_t cells = 0;
+    for (int c = 0; c < 8; ++c) cells = static_cast<uint8_t>(cells | (((slots[id] >> (8 * c)) & 0xFFu) ? 1u << c : 0u));
+    return cells;
   };
   Level cur;
   cur.Add(0, true, {-1, -1, -1, -1, -1, -1});
@@ -192,12 +196,18 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
       cur.mask[i] = mask;
       if constexpr (!Io::kEncoding) {
         if (level < levels) a.masks[level].push_back(mask);
-        if (level == levels) brick_cells[id] = mask;
-        if (level > levels) a.leaves[id >> 3] |= uint64_t{mask} << (8 * (id & 7));
+        if (level > levels) slots[id >> 3] |= uint64_t{mask} << (8 * (id & 7));
       }
       if (level >= levels) continue;
+      const int n = std::popcount(static_cast<unsigned>(mask));
+      if (level + 1 == levels) {  // brick slots
+        cur.kids[i] = static_cast<uint32_t>(child);
+        child += static_cast<size_t>(n);
+        if constexpr (!Io::kEncoding) slots.resize(child);
+        continue;
+      }
       cur.kids[i] = static_cast<uint32_t>(Io::kEncoding ? child : a.children[level].size());
-      for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
+      for (int c = n; c > 0; --c) {
         const uint32_t truth = Io::kEncoding ? a.children[level][child++] : 0;
         uint32_t k;
         if (seen > 0 && io.Bit(models->flag[height], truth < seen ? 1 : 0)) {
@@ -211,7 +221,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
       }
     }
     if (io.failed()) return Truncated("geometry stream ends early");
-    if (level < levels && seen != counts[level + 1]) {
+    if (level + 1 < levels && seen != counts[level + 1]) {
       return Corrupt("geometry stream holds fewer nodes than its header declares");
     }
     if (level + 1 < depth) cur = Expand(cur, level, levels, a);
@@ -226,7 +236,13 @@ StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth)
   std::vector<uint64_t> counts;
   for (const auto& m : arrays.masks) counts.push_back(m.size());
   counts.push_back(arrays.leaves.size());
-  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts));
+  std::vector<uint64_t> slots;
+  if (arrays.masks.empty()) {
+    slots = arrays.leaves;
+  } else {
+    for (uint32_t k : arrays.children.back()) slots.push_back(arrays.leaves[k]);
+  }
+  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots));
   return io.Finish();
 }
 
@@ -236,9 +252,24 @@ StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, c
   a.masks.resize(levels);
   a.children.resize(levels);
   for (int level = 0; level < levels; ++level) a.masks[level].reserve(counts[level]);
-  a.leaves.assign(counts[levels], 0);
+  std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
   DecoderIo io(payload);
-  RETURN_IF_ERROR(Traverse(io, a, depth, counts));
+  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots));
+  // Equal bricks become one, numbered in the order first seen: the canonical order.
+  std::unordered_map<uint64_t, uint32_t> index;
+  index.reserve(counts[levels]);
+  std::vector<uint32_t> ids;
+  ids.reserve(slots.size());
+  for (uint64_t brick : slots) {
+    const auto [it, added] = index.try_emplace(brick, static_cast<uint32_t>(a.leaves.size()));
+    if (added) {
+      if (a.leaves.size() == counts[levels]) return Corrupt("geometry stream holds more bricks than its header declares");
+      a.leaves.push_back(brick);
+    }
+    ids.push_back(it->second);
+  }
+  if (a.leaves.size() != counts[levels]) return Corrupt("geometry stream holds fewer bricks than its header declares");
+  if (levels > 0) a.children.back() = std::move(ids);
   return a;
 }
 
