@@ -41,7 +41,14 @@ struct Level {
   }
 };
 
-int Rank(unsigned mask, int bit) { return std::popcount(mask & ((1u << bit) - 1)); }
+// Set bits of a byte: the build has no popcount instruction to rely on, and this is the inner loop.
+constexpr std::array<uint8_t, 256> kBits = [] {
+  std::array<uint8_t, 256> t{};
+  for (int i = 0; i < 256; ++i) t[i] = static_cast<uint8_t>(std::popcount(static_cast<unsigned>(i)));
+  return t;
+}();
+
+int Rank(unsigned mask, int bit) { return kBits[mask & ((1u << bit) - 1)]; }
 
 class EncoderIo {
  public:
@@ -86,6 +93,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
     upper_exists |= (lv.nbr[i][2 * axis + 1] >= 0 ? 1u : 0u) << axis;
   }
   unsigned m = 0;
+  unsigned ones = 0;  // set bits so far, at most 3
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
@@ -106,10 +114,11 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
         }
         sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
       }
-      const unsigned ctx = (std::min(std::popcount(m), 3) * 8 + lower) * 27 + sides;
+      const unsigned ctx = (ones * 8 + lower) * 27 + sides;
       bit = io.Bit(models[ctx], (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;
+    ones += ones < 3 ? static_cast<unsigned>(bit) : 0u;
   }
   return static_cast<uint8_t>(m);
 }
@@ -121,7 +130,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
   for (size_t i = 0; i < cur.size(); ++i) {
     if (level >= levels || cur.first[i]) {
       base[i] = total;
-      total += std::popcount(static_cast<unsigned>(cur.mask[i]));
+      total += kBits[cur.mask[i]];
     }
   }
   Level next;
@@ -199,7 +208,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
         if (level > levels) slots[id >> 3] |= uint64_t{mask} << (8 * (id & 7));
       }
       if (level >= levels) continue;
-      const int n = std::popcount(static_cast<unsigned>(mask));
+      const int n = kBits[mask];
       if (level + 1 == levels) {  // brick slots
         cur.kids[i] = static_cast<uint32_t>(child);
         child += static_cast<size_t>(n);

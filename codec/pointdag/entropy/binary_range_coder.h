@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -35,12 +36,22 @@ struct YoungBitModel {
   uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }
   void Update(int bit) {
     const int32_t target = bit ? 0 : 65535;
-    const int32_t young = 65536 / (n + 2);
-    const int32_t f = std::max(young, 65536 >> 4), s = std::max(young, 65536 >> 7);
-    fast = static_cast<uint16_t>(fast + (((target - fast) * f) >> 16));
-    slow = static_cast<uint16_t>(slow + (((target - slow) * s) >> 16));
-    if (n < 255) ++n;
+    const Rates r = kRates[n];
+    fast = static_cast<uint16_t>(fast + (((target - fast) * r.fast) >> 16));
+    slow = static_cast<uint16_t>(slow + (((target - slow) * r.slow) >> 16));
+    if (n < kYoung) ++n;
   }
+
+ private:
+  struct Rates {
+    int32_t fast, slow;  // in 1/65536
+  };
+  static constexpr int kYoung = 127;  // 1/(n+2) is below both rates from here on
+  static constexpr std::array<Rates, kYoung + 1> kRates = [] {
+    std::array<Rates, kYoung + 1> t{};
+    for (int n = 0; n <= kYoung; ++n) t[n] = {std::max(65536 / (n + 2), 65536 >> 4), std::max(65536 / (n + 2), 65536 >> 7)};
+    return t;
+  }();
 };
 
 class BinaryRangeEncoder {
