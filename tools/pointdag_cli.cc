@@ -256,7 +256,7 @@ int Main(int argc, char** argv) {
   std::string input, output;
   GridChoice grid;
   bool json = false;
-  std::string coder_name = "context";
+  std::string coder_name = "spatial";
 
   auto* encode = app.add_subcommand("encode", "voxelize a scan (LAS/PLY/PCD) into a .pdag file");
   encode->add_option("input", input, "scan file")->required();
