@@ -82,40 +82,72 @@ class DecoderIo {
   BinaryRangeDecoder rc_;
 };
 
+// The context's parts as tables (the same arithmetic as PDAG_FORMAT §2.2 states it, per bit):
+// kSides[upper_exists << 3 | lower_exists][c]: per axis 2 = the parent's neighbour on the child's
+// side exists, 1 = only the one on the other side does, 0 = neither, in base 3 (x first).
+constexpr auto kSides = [] {
+  std::array<std::array<uint8_t, 8>, 64> t{};
+  for (unsigned e = 0; e < 64; ++e) {
+    for (int c = 0; c < 8; ++c) {
+      unsigned sides = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const bool up = (e >> (3 + axis)) & 1u, down = (e >> axis) & 1u;
+        const bool outer = (c & (4 >> axis)) ? up : down, opposite = (c & (4 >> axis)) ? down : up;
+        sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
+      }
+      t[e][c] = static_cast<uint8_t>(sides);
+    }
+  }
+  return t;
+}();
+// kSiblings[c][m]: the lower siblings of child c set in the mask so far (bit per axis).
+constexpr auto kSiblings = [] {
+  std::array<std::array<uint8_t, 256>, 8> t{};
+  for (int c = 0; c < 8; ++c) {
+    for (unsigned m = 0; m < 256; ++m) {
+      for (int axis = 0; axis < 3; ++axis) {
+        if (c & (4 >> axis)) t[c][m] = static_cast<uint8_t>(t[c][m] | ((m >> (c ^ (4 >> axis))) & 1u) << axis);
+      }
+    }
+  }
+  return t;
+}();
+// kFacing[axis][mask of the lower neighbour on that axis]: 4 bits per child c, its neighbour's
+// child next to it (bit `axis`) when c lies on that side.
+constexpr auto kFacing = [] {
+  std::array<std::array<uint32_t, 256>, 3> t{};
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a = 4 >> axis;
+    for (unsigned m = 0; m < 256; ++m) {
+      for (int c = 0; c < 8; ++c) {
+        if (!(c & a)) t[axis][m] |= ((m >> (c | a)) & 1u) << axis << (4 * c);
+      }
+    }
+  }
+  return t;
+}();
+
 // Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is implied.
 template <typename Io>
 uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth) {
-  unsigned lower_mask[3], lower_exists = 0, upper_exists = 0;
+  unsigned exists = 0;
+  uint32_t facing = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const int32_t lo = lv.nbr[i][2 * axis];
-    lower_mask[axis] = lo >= 0 ? lv.mask[lo] : 0;
-    lower_exists |= (lo >= 0 ? 1u : 0u) << axis;
-    upper_exists |= (lv.nbr[i][2 * axis + 1] >= 0 ? 1u : 0u) << axis;
+    if (lo >= 0) {
+      exists |= 1u << axis;
+      facing |= kFacing[axis][lv.mask[lo]];
+    }
+    if (lv.nbr[i][2 * axis + 1] >= 0) exists |= 8u << axis;
   }
+  const auto& sides = kSides[exists];
   unsigned m = 0;
   unsigned ones = 0;  // set bits so far, at most 3
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
-      unsigned lower = 0, sides = 0;
-      for (int axis = 0; axis < 3; ++axis) {
-        const int a = 4 >> axis;
-        const unsigned here = 1u << axis;
-        // The parent's neighbour on the child's side (outer) and on the other side (opposite).
-        unsigned outer, opposite;
-        if (c & a) {
-          lower |= ((m >> (c ^ a)) & 1u) << axis;  // lower sibling
-          outer = upper_exists & here;
-          opposite = lower_exists & here;
-        } else {
-          lower |= ((lower_mask[axis] >> (c | a)) & 1u) << axis;  // in the lower neighbour
-          outer = lower_exists & here;
-          opposite = upper_exists & here;
-        }
-        sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
-      }
-      const unsigned ctx = (ones * 8 + lower) * 27 + sides;
-      bit = io.Bit(models[ctx], (truth >> c) & 1);
+      const unsigned lower = ((facing >> (4 * c)) & 7u) | kSiblings[c][m];
+      bit = io.Bit(models[(ones * 8 + lower) * 27 + sides[c]], (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;
     ones += ones < 3 ? static_cast<unsigned>(bit) : 0u;

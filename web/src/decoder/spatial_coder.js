@@ -35,44 +35,61 @@ class GrowableU32 {
   }
 }
 
+// The context's parts as tables, as spatial_coder.cc builds them: SIDES[exists * 8 + c] (exists =
+// upper << 3 | lower neighbours present), SIBLINGS[c * 256 + m], FACING[axis * 256 + mask] (4 bits a child).
+const SIDES = new Uint8Array(64 * 8);
+const SIBLINGS = new Uint8Array(8 * 256);
+const FACING = new Uint32Array(3 * 256);
+for (let e = 0; e < 64; ++e) {
+  for (let c = 0; c < 8; ++c) {
+    let sides = 0;
+    for (let axis = 0; axis < 3; ++axis) {
+      const up = (e >> (3 + axis)) & 1;
+      const down = (e >> axis) & 1;
+      const outer = c & (4 >> axis) ? up : down;
+      const opposite = c & (4 >> axis) ? down : up;
+      sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
+    }
+    SIDES[e * 8 + c] = sides;
+  }
+}
+for (let c = 0; c < 8; ++c) {
+  for (let m = 0; m < 256; ++m) {
+    for (let axis = 0; axis < 3; ++axis) {
+      if (c & (4 >> axis)) SIBLINGS[c * 256 + m] |= ((m >> (c ^ (4 >> axis))) & 1) << axis;
+    }
+  }
+}
+for (let axis = 0; axis < 3; ++axis) {
+  const a = 4 >> axis;
+  for (let m = 0; m < 256; ++m) {
+    let t = 0;
+    for (let c = 0; c < 8; ++c) if (!(c & a)) t |= (((m >> (c | a)) & 1) << axis) << (4 * c);
+    FACING[axis * 256 + m] = t >>> 0;
+  }
+}
+
 // The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied.
 function decodeMask(rc, young, age, base, lv, i) {
   const o = 6 * i;
-  const lowerMask = [0, 0, 0];
-  let lowerExists = 0;
-  let upperExists = 0;
+  let exists = 0;
+  let facing = 0;
   for (let axis = 0; axis < 3; ++axis) {
     const lo = lv.nbr[o + 2 * axis];
     if (lo >= 0) {
-      lowerMask[axis] = lv.mask[lo];
-      lowerExists |= 1 << axis;
+      exists |= 1 << axis;
+      facing |= FACING[axis * 256 + lv.mask[lo]];
     }
-    if (lv.nbr[o + 2 * axis + 1] >= 0) upperExists |= 1 << axis;
+    if (lv.nbr[o + 2 * axis + 1] >= 0) exists |= 8 << axis;
   }
+  const sides = exists * 8;
   let m = 0;
   let ones = 0;
   for (let c = 0; c < 8; ++c) {
     let bit = 1;
     if (c < 7 || m !== 0) {
-      let lower = 0;
-      let sides = 0;
-      for (let axis = 0; axis < 3; ++axis) {
-        const a = 4 >> axis;
-        const here = 1 << axis;
-        let outer;
-        let opposite;
-        if (c & a) {
-          lower |= ((m >> (c ^ a)) & 1) << axis;
-          outer = upperExists & here;
-          opposite = lowerExists & here;
-        } else {
-          lower |= ((lowerMask[axis] >> (c | a)) & 1) << axis;
-          outer = lowerExists & here;
-          opposite = upperExists & here;
-        }
-        sides = sides * 3 + (outer ? 2 : opposite ? 1 : 0);
-      }
-      bit = rc.youngBit(young, age, base + (ones * 8 + lower) * 27 + sides);
+      const lower = ((facing >>> (4 * c)) & 7) | SIBLINGS[c * 256 + m];
+      bit = rc.youngBit(young, age, base + (ones * 8 + lower) * 27 + SIDES[sides + c]);
     }
     m |= bit << c;
     if (ones < 3) ones += bit;
