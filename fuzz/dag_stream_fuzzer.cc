@@ -1,4 +1,4 @@
-// The stored DAG stream alone (both coders: the second byte picks one), as DecodePdag runs it for a
+// The stored DAG stream alone (all three coders: the second byte picks one), as DecodePdag runs it for a
 // tile: nodes bounded as for a 2^24-voxel tile. A stream that decodes must re-encode to a stream
 // that decodes to the same DAG.
 #include <cstdint>
@@ -10,7 +10,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto dag = pointdag::DecodeDag(std::span<const uint8_t>(data, size), uint64_t{1} << 20);
   if (!dag.ok()) return 0;
-  for (auto coder : {pointdag::GeometryCoder::kZstd, pointdag::GeometryCoder::kContext}) {
+  for (auto coder : {pointdag::GeometryCoder::kZstd, pointdag::GeometryCoder::kContext, pointdag::GeometryCoder::kSpatial}) {
     const auto again = pointdag::EncodeDag(*dag, coder);
     if (!again.ok() || !(pointdag::DecodeDag(*again).value() == *dag)) std::abort();
   }

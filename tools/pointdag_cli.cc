@@ -257,13 +257,13 @@ int Main(int argc, char** argv) {
   std::string input, output;
   GridChoice grid;
   bool json = false;
-  std::string coder_name = "context";
+  std::string coder_name = "spatial";
 
   auto* encode = app.add_subcommand("encode", "voxelize a scan (LAS/PLY/PCD) into a .pdag file");
   encode->add_option("input", input, "scan file")->required();
   encode->add_option("-o,--output", output, "output .pdag")->required();
   AddGridOptions(encode, grid);
-  encode->add_option("--coder", coder_name, "geometry entropy coder")->check(CLI::IsMember({"context", "zstd"}));
+  encode->add_option("--coder", coder_name, "geometry entropy coder")->check(CLI::IsMember({"spatial", "context", "zstd"}));
   ColorChoice color_choice;
   encode->add_flag("--georeference", grid.georeference,
                    "voxelize in ENU metres about the scan's centre when it has a CRS (as pointdagd does)");
@@ -347,7 +347,9 @@ int Main(int argc, char** argv) {
       std::cerr << "pointdag encode: " << colors.status().message() << "\n";
       return 2;
     }
-    return RunEncode(input, output, grid, coder_name == "zstd" ? GeometryCoder::kZstd : GeometryCoder::kContext, *colors);
+    return RunEncode(input, output, grid, coder_name == "zstd"      ? GeometryCoder::kZstd
+                                                : coder_name == "context" ? GeometryCoder::kContext
+                                                                          : GeometryCoder::kSpatial, *colors);
   }
   if (decode->parsed()) return RunDecode(input, output);
   if (info->parsed()) return RunInfo(input, json);

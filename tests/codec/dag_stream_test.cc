@@ -64,13 +64,16 @@ INSTANTIATE_TEST_SUITE_P(
                       StreamCase{3, CountMode::kMipmap, GeometryCoder::kContext}, StreamCase{6, CountMode::kLeaves, GeometryCoder::kZstd},
                       StreamCase{10, CountMode::kLeaves, GeometryCoder::kZstd}, StreamCase{10, CountMode::kLeaves, GeometryCoder::kContext},
                       StreamCase{10, CountMode::kMipmap, GeometryCoder::kZstd}, StreamCase{10, CountMode::kMipmap, GeometryCoder::kContext},
-                      StreamCase{16, CountMode::kLeaves, GeometryCoder::kContext}, StreamCase{21, CountMode::kLeaves, GeometryCoder::kZstd}));
+                      StreamCase{16, CountMode::kLeaves, GeometryCoder::kContext}, StreamCase{21, CountMode::kLeaves, GeometryCoder::kZstd},
+                      StreamCase{2, CountMode::kLeaves, GeometryCoder::kSpatial}, StreamCase{3, CountMode::kMipmap, GeometryCoder::kSpatial},
+                      StreamCase{10, CountMode::kLeaves, GeometryCoder::kSpatial}, StreamCase{10, CountMode::kMipmap, GeometryCoder::kSpatial},
+                      StreamCase{16, CountMode::kLeaves, GeometryCoder::kSpatial}, StreamCase{21, CountMode::kLeaves, GeometryCoder::kSpatial}));
 
 TEST(DagStream, RepeatedSubtreesBecomeBackReferences) {
   std::vector<uint64_t> cube(4096);
   for (uint64_t i = 0; i < cube.size(); ++i) cube[i] = i;
   const Svdag dag = BuildDag(cube, 4).value();
-  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext}) {
+  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext, GeometryCoder::kSpatial}) {
     auto bytes = EncodeDag(dag, coder);
     ASSERT_TRUE(bytes.ok());
     EXPECT_EQ(DecodeDag(*bytes).value(), dag);
@@ -80,7 +83,7 @@ TEST(DagStream, RepeatedSubtreesBecomeBackReferences) {
 // Corrupt or cut streams come back as errors, never as crashes or unbounded allocations.
 TEST(DagStream, SurvivesTruncationAndBitFlips) {
   const Svdag dag = Build(9, 8000, 3);
-  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext}) {
+  for (GeometryCoder coder : {GeometryCoder::kZstd, GeometryCoder::kContext, GeometryCoder::kSpatial}) {
     const auto bytes = EncodeDag(dag, coder).value();
     for (size_t len = 0; len < bytes.size(); len += 1 + bytes.size() / 300) {
       auto cut = DecodeDag(std::span(bytes).first(len));

@@ -18,7 +18,7 @@ TEST_P(PipelineTest, RoundTripIsExact) {
   SKIP_WITHOUT_DATA();
   EncodeOptions options;
   options.voxel_size = GetParam().voxel;
-  for (GeometryCoder coder : {GeometryCoder::kContext, GeometryCoder::kZstd}) {
+  for (GeometryCoder coder : {GeometryCoder::kSpatial, GeometryCoder::kContext, GeometryCoder::kZstd}) {
     options.geometry_coder = coder;
     auto encoded = EncodeScan(DataDir() / GetParam().file, options);
     ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
@@ -94,7 +94,7 @@ TEST(Pipeline, MetadataCarriesSourceCrsAndCodec) {
   EXPECT_NE(meta["crs"]["wkt"].get<std::string>().find("Lambert_Conformal_Conic"), std::string::npos);
   EXPECT_EQ(meta["crs"]["geokeys"]["keys"].size(), 21u);
   EXPECT_FALSE(meta["crs"].contains("epsg"));  // the GeoKeys say user-defined (32767)
-  EXPECT_EQ(meta["codec"]["geometry"], "context");
+  EXPECT_EQ(meta["codec"]["geometry"], "spatial");
   EXPECT_EQ(meta["voxels"], 36931);
   EXPECT_EQ(meta["depth"], 9);
 }
@@ -105,10 +105,10 @@ TEST(Pipeline, CompressedSizesAreStable) {
   SKIP_WITHOUT_DATA();
   auto encoded = EncodeAutzenAt4Feet();
   ASSERT_TRUE(encoded.ok());
-  EXPECT_EQ(encoded->file.geometry.size(), 10049u);
+  EXPECT_EQ(encoded->file.geometry.size(), 8360u);  // coder 2, spatial contexts (10049 with coder 1)
   EXPECT_EQ(EncodeDag(encoded->dag, GeometryCoder::kZstd)->size(), 10408u);
   EXPECT_EQ(encoded->dag.ResidentBytes(), 33972u);
-  EXPECT_EQ(SerializePdag(encoded->file).size(), 58394u);  // lossless colors v2 (was 84872 with v1)
+  EXPECT_EQ(SerializePdag(encoded->file).size(), 56705u);  // lossless colors v2 (84872 with v1), geometry coder 2 (58394 with 1)
 }
 
 TEST(Pipeline, DecodeRejectsMetadataThatContradictsTheData) {

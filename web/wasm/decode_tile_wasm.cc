@@ -61,7 +61,7 @@ Result* Fail(Result* r, const pointdag::Status& status) {
 
 pointdag::Status RefuseUnsupported(const pointdag::PdagFile& file) {
   if (file.geometry.size() >= 2 && file.geometry[1] == static_cast<uint8_t>(pointdag::GeometryCoder::kZstd)) {
-    return pointdag::Unsupported("the geometry stream is zstd-coded; this decoder reads the context coder only");
+    return pointdag::Unsupported("the geometry stream is zstd-coded; this decoder reads the range coders only");
   }
   if (file.colors.empty()) return pointdag::Status::Ok();
   switch (static_cast<pointdag::ColorCodec>(file.colors[0])) {

@@ -7,6 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "pointdag/dag/dag_arrays.h"
+#include "pointdag/dag/spatial_coder.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/entropy/zstd_stream.h"
@@ -27,18 +29,6 @@ constexpr int kMaskClasses = kMaxDepth + 1;
 // A coded bit costs at least -log2(1 - 4/4096) = 0.0014 bits (12-bit probabilities of at most
 // 4091/4096, plus the coder's rounding) and a node at least one 8-bit mask: 8 / (8 x 0.0014) < 720.
 constexpr uint64_t kMaxContextNodesPerByte = 720;
-
-int InternalClass(const Svdag& dag, int level) { return dag.depth - level; }
-
-size_t RecordSize(const Svdag& dag, size_t word) {
-  return 1 + static_cast<size_t>(std::popcount(static_cast<unsigned>(dag.Mask(static_cast<uint32_t>(word)))));
-}
-
-uint64_t RecordCount(const Svdag& dag, int level) {
-  uint64_t n = 0;
-  for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1]; w += RecordSize(dag, w)) ++n;
-  return n;
-}
 
 // ---- Symbol sinks and sources: the traversal is written once per direction, the coding twice. ----
 
@@ -163,29 +153,19 @@ class ContextSource {
   BinaryRangeDecoder rc_;
 };
 
-// ---- Encoder traversal ----
+// ---- Traversals: the symbols of §2.2 in stream order ----
 
 template <typename Sink>
-Status WriteSymbols(const Svdag& dag, Sink& sink) {
-  const int levels = dag.internal_levels();
-  // Ordinal of every record start, so references can be told apart as new or repeated.
-  std::vector<uint32_t> ordinal(dag.nodes.size(), 0);
+void WriteSymbols(const DagArrays& a, Sink& sink, int depth) {
+  const int levels = static_cast<int>(a.masks.size());
   for (int level = 0; level < levels; ++level) {
-    uint32_t k = 0;
-    for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1]; w += RecordSize(dag, w)) ordinal[w] = k++;
-  }
-  for (int level = 0; level < levels; ++level) {
-    const int cls = InternalClass(dag, level);
-    const bool children_are_leaves = level + 1 == levels;
+    const int cls = depth - level;
     uint32_t seen = 0;  // nodes of the next level referenced so far
-    for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1];) {
-      const uint8_t mask = dag.Mask(static_cast<uint32_t>(w));
+    size_t child = 0;
+    for (const uint8_t mask : a.masks[level]) {
       sink.Mask(cls, mask);
-      const int n = std::popcount(static_cast<unsigned>(mask));
-      for (int i = 0; i < n; ++i) {
-        const uint32_t ref = dag.nodes[w + 1 + i];
-        const uint32_t k = children_are_leaves ? ref : ordinal[ref];
-        if (k > seen) return Internal("DAG is not in canonical breadth-first order");
+      for (int i = std::popcount(static_cast<unsigned>(mask)); i > 0; --i) {
+        const uint32_t k = a.children[level][child++];
         if (seen > 0) sink.Flag(cls, k < seen);
         if (k < seen) {
           sink.Ref(cls, k, seen);
@@ -193,12 +173,9 @@ Status WriteSymbols(const Svdag& dag, Sink& sink) {
           ++seen;
         }
       }
-      w += 1 + static_cast<size_t>(n);
     }
-    const uint64_t next_level = children_are_leaves ? dag.leaves.size() : RecordCount(dag, level + 1);
-    if (seen != next_level) return Internal("DAG holds nodes unreachable from its root");
   }
-  for (uint64_t brick : dag.leaves) {
+  for (uint64_t brick : a.leaves) {
     uint8_t cells = 0;
     for (int c = 0; c < 8; ++c) cells = static_cast<uint8_t>(cells | (((brick >> (8 * c)) & 0xFFu) ? 1u << c : 0u));
     sink.Mask(kBrickCellClass, cells);
@@ -206,26 +183,21 @@ Status WriteSymbols(const Svdag& dag, Sink& sink) {
       if ((cells >> c) & 1u) sink.Mask(kVoxelClass, static_cast<uint8_t>(brick >> (8 * c)));
     }
   }
-  return Status::Ok();
 }
 
-// ---- Decoder traversal ----
-
 template <typename Source>
-StatusOr<Svdag> ReadSymbols(Source& source, int depth, CountMode mode, const std::vector<uint64_t>& counts) {
-  Svdag dag;
-  dag.depth = depth;
-  dag.mode = mode;
-  const int levels = dag.internal_levels();
-  std::vector<std::vector<uint8_t>> masks(levels);
-  std::vector<std::vector<uint32_t>> children(levels);  // child ordinals, level by level
+StatusOr<DagArrays> ReadSymbols(Source& source, int depth, const std::vector<uint64_t>& counts) {
+  const int levels = depth - 2;
+  DagArrays a;
+  a.masks.resize(levels);
+  a.children.resize(levels);  // child ordinals, level by level
   for (int level = 0; level < levels; ++level) {
-    const int cls = InternalClass(dag, level);
+    const int cls = depth - level;
     uint32_t seen = 0;
     for (uint64_t i = 0; i < counts[level]; ++i) {
       const uint8_t mask = source.Mask(cls);
       if (mask == 0 || source.failed()) return Corrupt("geometry stream holds an empty or missing node mask");
-      masks[level].push_back(mask);
+      a.masks[level].push_back(mask);
       for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
         uint32_t k;
         if (seen > 0 && source.Flag(cls)) {
@@ -235,7 +207,7 @@ StatusOr<Svdag> ReadSymbols(Source& source, int depth, CountMode mode, const std
           k = seen++;
           if (seen > counts[level + 1]) return Corrupt("geometry stream holds more nodes than its header declares");
         }
-        children[level].push_back(k);
+        a.children[level].push_back(k);
       }
     }
     if (seen != counts[level + 1]) return Corrupt("geometry stream holds fewer nodes than its header declares");
@@ -250,88 +222,50 @@ StatusOr<Svdag> ReadSymbols(Source& source, int depth, CountMode mode, const std
       if (voxels == 0) return Corrupt("geometry stream holds an empty brick cell");
       brick |= uint64_t{voxels} << (8 * c);
     }
-    dag.leaves.push_back(brick);
+    a.leaves.push_back(brick);
   }
   if (source.failed()) return Truncated("geometry stream ends early");
-
-  // Counts bottom-up, then word addresses and records top-down.
-  std::vector<std::vector<uint64_t>> count(levels);
-  for (int level = levels - 1; level >= 0; --level) {
-    count[level].resize(masks[level].size());
-    size_t child = 0;
-    for (size_t i = 0; i < masks[level].size(); ++i) {
-      uint64_t sum = mode == CountMode::kMipmap ? 1 : 0;
-      for (int c = std::popcount(static_cast<unsigned>(masks[level][i])); c > 0; --c, ++child) {
-        const uint32_t k = children[level][child];
-        if (level + 1 == levels) {
-          sum += mode == CountMode::kMipmap ? BrickMipCount(dag.leaves[k]) : BrickVoxelCount(dag.leaves[k]);
-        } else {
-          sum += count[level + 1][k];
-        }
-      }
-      count[level][i] = sum;
-    }
-  }
-  std::vector<std::vector<uint32_t>> address(levels);
-  uint64_t word = 0;
-  for (int level = 0; level < levels; ++level) {
-    dag.level_offsets.push_back(static_cast<uint32_t>(word));
-    for (uint8_t mask : masks[level]) {
-      address[level].push_back(static_cast<uint32_t>(word));
-      word += 1 + static_cast<uint64_t>(std::popcount(static_cast<unsigned>(mask)));
-      if (word > 0xFFFFFFFFull) return ResourceLimit("decoded DAG exceeds 2^32 node words");
-    }
-  }
-  if (levels > 0) dag.level_offsets.push_back(static_cast<uint32_t>(word));
-  dag.nodes.reserve(word);
-  for (int level = 0; level < levels; ++level) {
-    size_t child = 0;
-    for (size_t i = 0; i < masks[level].size(); ++i) {
-      uint32_t field;
-      if (dag.IsUpperLevel(level)) {
-        if (count[level][i] > 0xFFFFFFFFull) return ResourceLimit("decoded DAG holds more than 2^32 voxels");
-        field = static_cast<uint32_t>(dag.upper_counts.size());
-        dag.upper_counts.push_back(static_cast<uint32_t>(count[level][i]));
-      } else {
-        field = static_cast<uint32_t>(count[level][i]);
-      }
-      dag.nodes.push_back(uint32_t{masks[level][i]} << 24 | field);
-      for (int c = std::popcount(static_cast<unsigned>(masks[level][i])); c > 0; --c, ++child) {
-        const uint32_t k = children[level][child];
-        dag.nodes.push_back(level + 1 == levels ? k : address[level + 1][k]);
-      }
-    }
-  }
-  return dag;
+  return a;
 }
 
 }  // namespace
 
 const char* GeometryCoderName(GeometryCoder coder) {
-  return coder == GeometryCoder::kZstd ? "zstd" : "context";
+  switch (coder) {
+    case GeometryCoder::kZstd: return "zstd";
+    case GeometryCoder::kContext: return "context";
+    case GeometryCoder::kSpatial: return "spatial";
+  }
+  return "?";
 }
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) {
   RETURN_IF_ERROR(dag.Validate());
+  ASSIGN_OR_RETURN(const DagArrays arrays, ToArrays(dag));
   std::vector<uint8_t> out = {kStreamVersion, static_cast<uint8_t>(coder), static_cast<uint8_t>(dag.depth),
                               static_cast<uint8_t>(dag.mode)};
   // Node count of every level (bricks last): bounds the decoder's allocations before it starts.
-  for (int level = 0; level < dag.internal_levels(); ++level) PutVarint(out, RecordCount(dag, level));
-  PutVarint(out, dag.leaves.size());
+  for (const auto& masks : arrays.masks) PutVarint(out, masks.size());
+  PutVarint(out, arrays.leaves.size());
+  if (coder == GeometryCoder::kSpatial) {
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth));
+    out.insert(out.end(), payload.begin(), payload.end());
+    return out;
+  }
   if (coder == GeometryCoder::kZstd) {
     ZstdSink sink;
-    RETURN_IF_ERROR(WriteSymbols(dag, sink));
+    WriteSymbols(arrays, sink, dag.depth);
     return sink.Finish(std::move(out));
   }
   ContextSink sink;
-  RETURN_IF_ERROR(WriteSymbols(dag, sink));
+  WriteSymbols(arrays, sink, dag.depth);
   return sink.Finish(std::move(out));
 }
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
   if (bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
-  if (bytes[1] > 1) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
+  if (bytes[1] > 2) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];
   if (depth < 2 || depth > kMaxDepth) return Corrupt("geometry stream depth " + std::to_string(depth) + " is outside 2..21");
@@ -351,23 +285,29 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   }
   if (counts[0] != 1) return Corrupt("geometry stream must have exactly one root");
 
-  StatusOr<Svdag> dag = Corrupt("unreachable");
+  StatusOr<DagArrays> arrays = Corrupt("unreachable");
   if (coder == GeometryCoder::kZstd) {
     ZstdSource source;
     RETURN_IF_ERROR(source.Open(bytes, pos, counts));
-    dag = ReadSymbols(source, depth, mode, counts);
+    arrays = ReadSymbols(source, depth, counts);
   } else {
-    // The payload's size bounds the nodes it can hold (kMaxContextNodesPerByte).
+    // The payload's size bounds the nodes it can hold.
     const uint64_t payload = bytes.size() - pos + 8;  // + the zero bytes the decoder may read past the end
-    if (total > payload * kMaxContextNodesPerByte) {
+    const uint64_t per_byte = coder == GeometryCoder::kContext ? kMaxContextNodesPerByte : kMaxSpatialNodesPerByte;
+    if (total > payload * per_byte) {
       return Corrupt("geometry stream declares " + std::to_string(total) + " nodes, more than its " +
                      std::to_string(bytes.size() - pos) + " bytes can hold");
     }
-    ContextSource source(bytes.subspan(pos));
-    dag = ReadSymbols(source, depth, mode, counts);
+    if (coder == GeometryCoder::kContext) {
+      ContextSource source(bytes.subspan(pos));
+      arrays = ReadSymbols(source, depth, counts);
+    } else {
+      arrays = DecodeSpatial(bytes.subspan(pos), depth, counts);
+    }
   }
-  if (!dag.ok()) return dag.status();
-  RETURN_IF_ERROR(dag->Validate());
+  if (!arrays.ok()) return arrays.status();
+  ASSIGN_OR_RETURN(Svdag dag, FromArrays(*arrays, depth, mode));
+  RETURN_IF_ERROR(dag.Validate());
   return dag;
 }
 

@@ -8,11 +8,15 @@
 // bricks are written as a 2x2x2 cell mask plus one voxel mask per occupied cell, i.e. as the two
 // octree levels they stand for. Counts are not stored: the decoder recomputes them bottom-up.
 //
-// Two entropy back-ends code the same symbols (normative layout: proto/PDAG_FORMAT.md):
+// Three entropy back-ends (normative layout: proto/PDAG_FORMAT.md):
 // - kZstd: masks, flags and references in separate byte streams, each compressed with zstd -19;
 // - kContext: one adaptive binary range coder; each mask bit's probability is conditioned on the
-//   node's height and on the mask bits already coded (a bit-tree per height), flags on the height.
-// DecodeDag() runs in linear time and returns the identical resident DAG.
+//   node's height and on the mask bits already coded (a bit-tree per height), flags on the height;
+// - kSpatial (the default): the range coder with contexts from each node's spatial neighbours,
+//   bricks coded at every occurrence and merged by the decoder (spatial_coder.h): 4-7% above
+//   G-PCC's lossless octree, 12-31% below kContext, decoding 2.7x slower than kContext.
+// DecodeDag() runs in linear time (in the stored DAG plus its brick occurrences) and returns the
+// identical resident DAG.
 #pragma once
 
 #include <cstdint>
@@ -23,7 +27,7 @@
 
 namespace pointdag {
 
-enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1 };
+enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2 };
 const char* GeometryCoderName(GeometryCoder coder);
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder);

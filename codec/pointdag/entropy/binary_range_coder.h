@@ -4,6 +4,8 @@
 // corrupt input decodes to garbage that the caller's structural checks reject, never to a crash.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -26,9 +28,36 @@ struct BitModel {
   }
 };
 
+// A BitModel that learns fast while young: both estimates move by 1/(n+2) after n updates until
+// that is slower than their own rates. Suits many sparse contexts (the geometry's neighbour contexts).
+struct YoungBitModel {
+  uint16_t fast = 32768, slow = 32768;
+  uint8_t n = 0;
+  uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }
+  void Update(int bit) {
+    const int32_t target = bit ? 0 : 65535;
+    const Rates r = kRates[n];
+    fast = static_cast<uint16_t>(fast + (((target - fast) * r.fast) >> 16));
+    slow = static_cast<uint16_t>(slow + (((target - slow) * r.slow) >> 16));
+    if (n < kYoung) ++n;
+  }
+
+ private:
+  struct Rates {
+    int32_t fast, slow;  // in 1/65536
+  };
+  static constexpr int kYoung = 127;  // 1/(n+2) is below both rates from here on
+  static constexpr std::array<Rates, kYoung + 1> kRates = [] {
+    std::array<Rates, kYoung + 1> t{};
+    for (int n = 0; n <= kYoung; ++n) t[n] = {std::max(65536 / (n + 2), 65536 >> 4), std::max(65536 / (n + 2), 65536 >> 7)};
+    return t;
+  }();
+};
+
 class BinaryRangeEncoder {
  public:
-  void Encode(BitModel& m, int bit) {
+  template <typename Model>
+  void Encode(Model& m, int bit) {
     const uint32_t bound = (range_ >> 12) * m.P0();
     if (bit == 0) {
       range_ = bound;
@@ -85,7 +114,8 @@ class BinaryRangeDecoder {
   explicit BinaryRangeDecoder(std::span<const uint8_t> in) : in_(in) {
     for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
   }
-  int Decode(BitModel& m) {
+  template <typename Model>
+  int Decode(Model& m) {
     const uint32_t bound = (range_ >> 12) * m.P0();
     int bit;
     if (code_ < bound) {

@@ -34,7 +34,7 @@ struct Tile {
 
 struct TilingOptions {
   int tile_depth = 8;
-  GeometryCoder geometry_coder = GeometryCoder::kContext;
+  GeometryCoder geometry_coder = GeometryCoder::kSpatial;
   ColorEncodeOptions colors{ColorCodec::kVariableRate, 38.0};
   ProgressFn progress;  // (tiles done, tiles total)
 };

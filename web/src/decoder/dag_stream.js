@@ -8,6 +8,7 @@
 // voxel count, bottom-up, as doubles (exact far beyond any limit they are compared with).
 import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
 import { GAMMA_MODELS, RangeDecoder, bitWidth, newModels } from './range_coder.js';
+import { decodeSpatial } from './spatial_coder.js';
 import { readVarint } from './varint.js';
 
 export const MAX_DEPTH = 21;
@@ -16,8 +17,12 @@ export const COUNT_MIPMAP = 1;
 
 const STREAM_VERSION = 1;
 const CODER_ZSTD = 0;
-// A coded bit costs at least 0.0014 bits and a node one 8-bit mask: a byte holds < 720 nodes.
+const CODER_CONTEXT = 1;
+const CODER_SPATIAL = 2;
+// A coded bit costs at least 0.0014 bits and a node one 8-bit mask: a byte holds < 720 nodes
+// (coder 1); coder 2 codes at least 7 bits a mask: < 820.
 const MAX_CONTEXT_NODES_PER_BYTE = 720;
+const MAX_SPATIAL_NODES_PER_BYTE = 820;
 
 // Context classes: internal nodes by height (3..21), brick cell masks (2), brick voxel masks (1).
 const VOXEL_CLASS = 1;
@@ -173,7 +178,7 @@ function addCounts(dag) {
 export function decodeDag(bytes, maxNodes) {
   if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
   if (bytes[0] !== STREAM_VERSION) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
-  if (bytes[1] > 1) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
+  if (bytes[1] > CODER_SPATIAL) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
   const depth = bytes[2];
   if (depth < 2 || depth > MAX_DEPTH) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);
   if (bytes[3] > 1) throw corrupt(`geometry stream names unknown count mode ${bytes[3]}`);
@@ -192,12 +197,14 @@ export function decodeDag(bytes, maxNodes) {
     total += c;
   }
   if (counts[0] !== 1) throw corrupt('geometry stream must have exactly one root');
-  if (bytes[1] === CODER_ZSTD) throw unsupported('the geometry stream is zstd-coded; this decoder reads the context coder only');
+  if (bytes[1] === CODER_ZSTD) throw unsupported('the geometry stream is zstd-coded; this decoder reads the range coders only');
   const payload = bytes.length - cursor.pos + 8;  // + the zero bytes the decoder may read past the end
-  if (total > payload * MAX_CONTEXT_NODES_PER_BYTE) {
+  const perByte = bytes[1] === CODER_CONTEXT ? MAX_CONTEXT_NODES_PER_BYTE : MAX_SPATIAL_NODES_PER_BYTE;
+  if (total > payload * perByte) {
     throw corrupt(`geometry stream declares ${total} nodes, more than its ${bytes.length - cursor.pos} bytes can hold`);
   }
-  const dag = readSymbols(new RangeDecoder(bytes, cursor.pos), depth, mode, counts);
+  const rc = new RangeDecoder(bytes, cursor.pos);
+  const dag = bytes[1] === CODER_CONTEXT ? readSymbols(rc, depth, mode, counts) : { ...decodeSpatial(rc, depth, counts), mode };
   addCounts(dag);
   return dag;
 }

@@ -23,7 +23,7 @@ export const DEFAULT_LIMITS = Object.freeze({ maxVoxels: 2 ** 27, maxNodes: 2 **
 // before anything else is decoded, at the same point in both, so that both fail alike.
 export function refuseUnsupported(geometry, colors) {
   if (geometry.length >= 2 && geometry[1] === 0) {
-    throw unsupported('the geometry stream is zstd-coded; this decoder reads the context coder only');
+    throw unsupported('the geometry stream is zstd-coded; this decoder reads the range coders only');
   }
   const why = colors ? unsupportedColorCodec(colors[0]) : null;
   if (why) throw unsupported(`${why} are not read by this decoder`);

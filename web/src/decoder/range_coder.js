@@ -11,6 +11,11 @@
 const SIGN = 0x80000000;
 const TOP_BYTE = 0xff000000;  // range < 2^24 <=> its top byte is zero
 
+// Young models' rates in 1/65536 by age: 1/(n+2) until that is below 1/16 (fast) or 1/128 (slow).
+const YOUNG = 127;
+const YOUNG_FAST = Int32Array.from({ length: YOUNG + 1 }, (_, n) => Math.max(Math.floor(65536 / (n + 2)), 65536 >> 4));
+const YOUNG_SLOW = Int32Array.from({ length: YOUNG + 1 }, (_, n) => Math.max(Math.floor(65536 / (n + 2)), 65536 >> 7));
+
 export function newModels(count) {
   return new Uint16Array(2 * count).fill(32768);
 }
@@ -68,6 +73,39 @@ export class RangeDecoder {
       p[2 * m + 1] = s - (s >> 7);
       bit = 1;
     }
+    while ((range & TOP_BYTE) === 0) {
+      range <<= 8;
+      code = (code << 8) | this.next();
+    }
+    st[0] = range;
+    st[1] = code;
+    return bit;
+  }
+  // A bit of a model that learns fast while young (YoungBitModel in binary_range_coder.h): both
+  // estimates move by max(1/(n+2), their own rate) after n updates; `age` holds n per model.
+  youngBit(p, age, m) {
+    const st = this.s;
+    let range = st[0];
+    let code = st[1];
+    const f = p[2 * m];
+    const s = p[2 * m + 1];
+    const n = age[m];
+    const bound = Math.imul(range >>> 12, ((f + s) >>> 5) | 1);
+    let bit;
+    let target;
+    if ((code ^ SIGN) < (bound ^ SIGN)) {
+      range = bound;
+      bit = 0;
+      target = 65535;
+    } else {
+      code = (code - bound) | 0;
+      range = (range - bound) | 0;
+      bit = 1;
+      target = 0;
+    }
+    p[2 * m] = f + (((target - f) * YOUNG_FAST[n]) >> 16);
+    p[2 * m + 1] = s + (((target - s) * YOUNG_SLOW[n]) >> 16);
+    if (n < YOUNG) age[m] = n + 1;
     while ((range & TOP_BYTE) === 0) {
       range <<= 8;
       code = (code << 8) | this.next();

@@ -1,0 +1,31 @@
+// Geometry coder 2 (proto/PDAG_FORMAT.md §2.2): the DAG's symbols range-coded with contexts from
+// the true spatial neighbours of each node, as G-PCC's octree coder conditions on its neighbours.
+//
+// The coder walks the octree level by level in Morton order, over the cells it can know: the
+// children of every node coded for the first time (a node's first occurrence is its position), and
+// below the last internal level every brick occurrence, new or repeated, with its cells. Each
+// cell keeps its six face neighbours on its level, found top-down from its parent's (no search),
+// so a child bit is modelled by the children already known next to it on its own level (in the
+// lower neighbours, coded before it in Morton order, and its lower siblings) and by the occupancy
+// of the parent's neighbours around it. Cells below a repeated internal node are not visited (that
+// bounds the walk by the stored DAG, not by the voxels) and count as empty neighbours.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pointdag/dag/dag_arrays.h"
+
+namespace pointdag {
+
+// A coded bit costs at least 0.0014 bits and a node mask at least 7 bits (an 8th lone bit is
+// implied): a byte of payload holds fewer than 8 / (7 x 0.0014) < 820 nodes.
+constexpr uint64_t kMaxSpatialNodesPerByte = 820;
+
+StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth);
+
+// `counts`: nodes per internal level, then bricks (the stream's level table, already checked).
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts);
+
+}  // namespace pointdag
