@@ -132,6 +132,21 @@ TEST(BlockCodec, EqualColorsBecomeOneZeroBitBlockPerMacroBlock) {
   EXPECT_EQ(decoder->DecodeAll(), colors);
 }
 
+// Colors every threshold codes exactly measure an infinite PSNR: the target search must still end
+// on a finite threshold (a NaN one is undefined behaviour, which UBSan reports; tiny tiles meet it).
+TEST(ColorCodec, TargetOnColorsCodedExactlyEndsOnAFiniteThreshold) {
+  for (const std::vector<Rgb8>& colors : {std::vector<Rgb8>(7, Rgb8{1, 2, 3}), std::vector<Rgb8>{{0, 0, 0}, {255, 255, 255}},
+                                          std::vector<Rgb8>{{10, 20, 30}}}) {
+    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+      auto encoded = EncodeColors(colors, {codec, 38.0});
+      ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+      EXPECT_TRUE(std::isfinite(encoded->max_mse)) << encoded->max_mse;
+      EXPECT_GE(encoded->psnr.y, 38.0);
+      EXPECT_EQ(*DecodeColors(encoded->bytes, colors.size()), colors);
+    }
+  }
+}
+
 TEST(BlockCodec, VariableRateUsesZeroBitBlocksOnFlatRuns) {
   const auto colors = SyntheticColors(20000, 3);
   const auto blocks = *EncodeBlocks(colors, BlockLayout::kVariableRate, 4.0);  // below the noise: gradients need bits

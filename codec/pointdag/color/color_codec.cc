@@ -109,6 +109,9 @@ StatusOr<EncodedColors> SearchBlockThreshold(std::span<const Rgb8> colors, std::
                                              double target, int steps) {
   constexpr double kClose = 0.02, kAim = 0.01, kLn10 = 2.302585092994046;
   constexpr double kDefaultSlope = -10.0 / kLn10;  // dB per unit of ln(threshold)
+  constexpr double kExactDb = 100.0;
+  // Thresholds from 1e-3 (exact in practice) to 3e5 (above any 8-bit MSE: one block).
+  const double kMinLogT = std::log(1e-3), kMaxLogT = std::log(3e5);
   const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
   struct Point {
     double log_t, psnr;
@@ -119,7 +122,8 @@ StatusOr<EncodedColors> SearchBlockThreshold(std::span<const Rgb8> colors, std::
   double log_t = std::log(allowed * 1.5);
   for (int step = 0; step <= steps; ++step) {
     ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, judged, codec, std::exp(log_t)));  // measured by decoding
-    const Point point{log_t, trial.psnr.y};
+    // Exact colors measure an infinite PSNR: a finite stand-in keeps the slopes numbers.
+    const Point point{log_t, std::min(trial.psnr.y, kExactDb)};
     if (trial.psnr.y >= target) {
       if (!pass || point.log_t > pass->log_t) pass = point;
       if (!best || trial.bytes.size() <= best->bytes.size()) best = std::move(trial);
@@ -141,6 +145,7 @@ StatusOr<EncodedColors> SearchBlockThreshold(std::span<const Rgb8> colors, std::
       }
       log_t = from.log_t + (target + kAim - from.psnr) / slope;
     }
+    log_t = std::clamp(log_t, kMinLogT, kMaxLogT);  // a flat curve would send it to infinity
     last = point;
   }
   if (best) return *std::move(best);
