@@ -1,6 +1,6 @@
 // The stored DAG stream alone (all three coders: the second byte picks one), as DecodePdag runs it for a
 // tile: nodes bounded as for a 2^24-voxel tile. A stream that decodes must re-encode to a stream
-// that decodes to the same DAG.
+// that decodes to the same DAG (or, for coder 2, be refused as storing a brick twice).
 #include <cstdint>
 #include <cstdlib>
 #include <span>
@@ -12,6 +12,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!dag.ok()) return 0;
   for (auto coder : {pointdag::GeometryCoder::kZstd, pointdag::GeometryCoder::kContext, pointdag::GeometryCoder::kSpatial}) {
     const auto again = pointdag::EncodeDag(*dag, coder);
+    // Coder 2 refuses, by contract, a DAG that stores a brick twice (which coders 0 and 1 can carry).
+    if (coder == pointdag::GeometryCoder::kSpatial && again.status().code() == pointdag::StatusCode::kInvalidArgument) continue;
     if (!again.ok() || !(pointdag::DecodeDag(*again).value() == *dag)) std::abort();
   }
   return 0;

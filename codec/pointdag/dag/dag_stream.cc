@@ -6,6 +6,7 @@
 #include <bit>
 #include <memory>
 #include <string>
+#include <unordered_set>
 
 #include "pointdag/dag/dag_arrays.h"
 #include "pointdag/dag/spatial_coder.h"
@@ -248,6 +249,12 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
   for (const auto& masks : arrays.masks) PutVarint(out, masks.size());
   PutVarint(out, arrays.leaves.size());
   if (coder == GeometryCoder::kSpatial) {
+    // Its decoder merges equal bricks, so only a DAG that stores each brick once comes back the same
+    // (the builder's always does; one decoded from a hostile coder 0/1 stream may not).
+    std::unordered_set<uint64_t> seen;
+    for (uint64_t brick : arrays.leaves) {
+      if (!seen.insert(brick).second) return InvalidArgument("geometry coder 2 needs each brick stored once: one repeats");
+    }
     ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth));
     out.insert(out.end(), payload.begin(), payload.end());
     return out;
