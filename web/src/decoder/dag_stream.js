@@ -7,6 +7,7 @@
 // plus each node's count (§2.3: voxels in leaf mode, nodes and voxels in mipmap mode) and its
 // voxel count, bottom-up, as doubles (exact far beyond any limit they are compared with).
 import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
+import { GrowableU32 } from './growable_u32.js';
 import { GAMMA_MODELS, RangeDecoder, bitWidth, newModels } from './range_coder.js';
 import { decodeSpatial } from './spatial_coder.js';
 import { readVarint } from './varint.js';
@@ -45,24 +46,6 @@ function brickMipCount(lo, hi) {
   let cells = 0;
   for (let c = 0; c < 4; ++c) cells += ((lo >>> (8 * c)) & 0xff ? 1 : 0) + ((hi >>> (8 * c)) & 0xff ? 1 : 0);
   return 1 + cells + popcount32(lo) + popcount32(hi);
-}
-
-class GrowableU32 {
-  constructor(capacity) {
-    this.a = new Uint32Array(Math.max(16, capacity));
-    this.n = 0;
-  }
-  push(v) {
-    if (this.n === this.a.length) {
-      const bigger = new Uint32Array(2 * this.a.length);
-      bigger.set(this.a);
-      this.a = bigger;
-    }
-    this.a[this.n++] = v;
-  }
-  done() {
-    return this.a.subarray(0, this.n);
-  }
 }
 
 function readSymbols(rc, depth, mode, counts) {

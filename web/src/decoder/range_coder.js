@@ -73,12 +73,7 @@ export class RangeDecoder {
       p[2 * m + 1] = s - (s >> 7);
       bit = 1;
     }
-    while ((range & TOP_BYTE) === 0) {
-      range <<= 8;
-      code = (code << 8) | this.next();
-    }
-    st[0] = range;
-    st[1] = code;
+    this.settle(range, code);
     return bit;
   }
   // A bit of a model that learns fast while young (YoungBitModel in binary_range_coder.h): both
@@ -106,13 +101,17 @@ export class RangeDecoder {
     p[2 * m] = f + (((target - f) * YOUNG_FAST[n]) >> 16);
     p[2 * m + 1] = s + (((target - s) * YOUNG_SLOW[n]) >> 16);
     if (n < YOUNG) age[m] = n + 1;
+    this.settle(range, code);
+    return bit;
+  }
+  // Renormalises (a byte in while the range's top byte is zero) and keeps the state.
+  settle(range, code) {
     while ((range & TOP_BYTE) === 0) {
       range <<= 8;
       code = (code << 8) | this.next();
     }
-    st[0] = range;
-    st[1] = code;
-    return bit;
+    this.s[0] = range;
+    this.s[1] = code;
   }
   // Equiprobable bits, most significant first.
   direct(bits) {
@@ -127,12 +126,7 @@ export class RangeDecoder {
         bit = 1;
       }
       value = value * 2 + bit;
-      while ((range & TOP_BYTE) === 0) {
-        range <<= 8;
-        code = (code << 8) | this.next();
-      }
-      st[0] = range;
-      st[1] = code;
+      this.settle(range, code);
     }
     return value;
   }

@@ -3,6 +3,7 @@
 // know, each child bit modelled by its known neighbours on its level and its parent's neighbours;
 // bricks coded in full at every slot and merged here. Returns readSymbols' shape (dag_stream.js).
 import { corrupt } from './pdag_error.js';
+import { GrowableU32 } from './growable_u32.js';
 import { GAMMA_MODELS, bitWidth, newModels } from './range_coder.js';
 
 const CLASSES = 22;  // heights 0..21
@@ -18,21 +19,6 @@ const rank = (mask, bit) => POP[mask & ((1 << bit) - 1)];
 
 function newLevel(n) {
   return { n, id: new Uint32Array(n), first: new Uint8Array(n), nbr: new Int32Array(6 * n), mask: new Uint8Array(n), kids: new Uint32Array(n) };
-}
-
-class GrowableU32 {
-  constructor(capacity) {
-    this.a = new Uint32Array(Math.max(16, capacity));
-    this.n = 0;
-  }
-  push(v) {
-    if (this.n === this.a.length) {
-      const bigger = new Uint32Array(2 * this.a.length);
-      bigger.set(this.a);
-      this.a = bigger;
-    }
-    this.a[this.n++] = v;
-  }
 }
 
 // The context's parts as tables, as spatial_coder.cc builds them: SIDES[exists * 8 + c] (exists =
@@ -250,7 +236,7 @@ export function decodeSpatial(rc, depth, counts) {
       first[n] = level + 1 === levels ? slots : kids.n;
       masks.push(levelMasks);
       firstChild.push(first);
-      children.push(kids.a.subarray(0, kids.n));
+      children.push(kids.done());
       if (level + 1 === levels) {
         slotLo = new Uint32Array(slots);
         slotHi = new Uint32Array(slots);
