@@ -1,6 +1,7 @@
 // `pointdag bench --versus`: issue #14's side-by-side table. Ours and Draco measured in this run on
 // the same voxels; G-PCC (TMC13 v23, lossless-geometry octree + RAHT) as the constants the issue
 // measured on the reference voxelizer's output, for reference (TMC13 is not packaged for Debian).
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -12,7 +13,9 @@
 
 #include "bench.h"
 #include "pointdag/compare/draco_compare.h"
+#include "pointdag/container/pdag_file.h"
 #include "pointdag/pipeline.h"
+#include "pointdag/tile/tiler.h"
 
 namespace pointdag {
 namespace {
@@ -47,6 +50,26 @@ double BitsAt(const std::vector<RatePoint>& curve, double psnr) {
   return a.bits + (b.bits - a.bits) * (psnr - a.psnr_y) / (b.psnr_y - a.psnr_y);
 }
 
+// The daemon's LOD tiles of `grid` (VBR colors at its default target) decoded as a client decodes
+// them (parse, DAG, colors, mipmaps), best of three passes: points per second, counting each tile's
+// voxels (every level's, since a client refining to the finest level decodes the levels above too).
+StatusOr<double> TileDecodeRate(const VoxelGrid& grid) {
+  ASSIGN_OR_RETURN(const TileSet tiles, BuildTiles(grid, ScanInfo{}, "versus", TilingOptions{}));
+  double points = 0;
+  for (const Tile& tile : tiles.tiles) points += static_cast<double>(tile.voxels);
+  double best = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto start = std::chrono::steady_clock::now();
+    for (const Tile& tile : tiles.tiles) {
+      ASSIGN_OR_RETURN(const PdagFile file, ParsePdag(tile.bytes));
+      RETURN_IF_ERROR(DecodePdag(file).status());
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (pass == 0 || seconds < best) best = seconds;
+  }
+  return points / best;
+}
+
 nlohmann::json VersusCase(const std::filesystem::path& scan, const GpccReference& reference) {
   EncodeOptions options;
   options.voxel_size = reference.voxel;
@@ -65,12 +88,16 @@ nlohmann::json VersusCase(const std::filesystem::path& scan, const GpccReference
   }
   auto draco = DracoEncodeVoxels(grid);
   if (!draco.ok()) return {{"error", draco.status().ToString()}};
+  auto tile_rate = TileDecodeRate(grid);
+  if (!tile_rate.ok()) return {{"error", tile_rate.status().ToString()}};
   const std::vector<RatePoint> raht = {reference.raht.first, reference.raht.second};
   nlohmann::json r = {{"scan", scan.filename().string()}, {"voxel", reference.voxel}, {"voxels", grid.morton.size()},
                       {"geometry_bits", geometry}, {"gpcc_geometry_bits", reference.geometry_bits},
                       {"lossless_color_bits", lossless}, {"lossless_total_bits", geometry + lossless},
                       {"draco_lossless_total_bits", draco->bits_per_point},
-                      {"issue_draco_lossless_total_bits", reference.draco_lossless_total}};
+                      {"issue_draco_lossless_total_bits", reference.draco_lossless_total},
+                      {"tile_decode_points_per_second", *tile_rate},
+                      {"draco_decode_points_per_second", voxels / draco->decode_seconds}};
   for (double psnr : {34.0, 38.0, 42.0}) {
     const std::string at = std::to_string(static_cast<int>(psnr));
     r["vbr_color_bits_at_" + at] = BitsAt(vbr, psnr);
@@ -123,6 +150,14 @@ int RunVersusBench(const BenchOptions& options) {
       std::printf("| %s | %s | %.3f | %.2f | %.2f | %.3f | %.2f | %.2f |\n", r["scan"].get<std::string>().c_str(), at,
                   vbr, raht, vbr / raht, ours, theirs, ours / theirs);
     }
+  }
+  std::printf("\n| scan | tile decode M points/s ours | Draco decode M points/s | ours/Draco (goal ≥ 2) |\n"
+              "|---|---|---|---|\n");
+  for (const auto& r : rows) {
+    if (r.contains("error")) continue;
+    const double ours = r["tile_decode_points_per_second"], draco = r["draco_decode_points_per_second"];
+    std::printf("| %s | %.2f | %.2f | %.2f |\n", r["scan"].get<std::string>().c_str(), ours / 1e6, draco / 1e6,
+                ours / draco);
   }
   for (const auto& r : rows) {
     if (r.contains("error")) std::printf("%s: %s\n", r.value("scan", "?").c_str(), r["error"].get<std::string>().c_str());

@@ -57,12 +57,17 @@ StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid, DracoSearch searc
   }
   if (best.bytes == 0) return Internal("Draco could not encode the voxels with any method");
 
-  draco::DecoderBuffer in;
-  in.Init(best_buffer.data(), best_buffer.size());
-  draco::Decoder decoder;
-  auto decoded = decoder.DecodePointCloudFromBuffer(&in);
-  if (!decoded.ok() || decoded.value()->num_points() != n) {
-    return Internal("Draco's smallest encoding does not decode back to the same number of points");
+  for (int pass = 0; pass < 3; ++pass) {
+    draco::DecoderBuffer in;
+    in.Init(best_buffer.data(), best_buffer.size());
+    draco::Decoder decoder;
+    const auto start = std::chrono::steady_clock::now();
+    auto decoded = decoder.DecodePointCloudFromBuffer(&in);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!decoded.ok() || decoded.value()->num_points() != n) {
+      return Internal("Draco's smallest encoding does not decode back to the same number of points");
+    }
+    if (pass == 0 || seconds < best.decode_seconds) best.decode_seconds = seconds;
   }
   best.bits_per_point = 8.0 * static_cast<double>(best.bytes) / static_cast<double>(n);
   return best;
