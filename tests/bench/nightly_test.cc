@@ -57,6 +57,14 @@ TEST(Corpus, TomlCasesWithVoxelsTargetsAndDerivedSizes) {
   EXPECT_EQ((*cases)[1].targets, (std::vector<double>{38.0}));
 }
 
+TEST(Corpus, TheShippedCorpusNamesTheSharedScans) {
+  SKIP_WITHOUT_DATA();
+  auto cases = LoadCorpus(std::filesystem::path(POINTDAG_SOURCE_DIR) / "configs" / "corpus.toml");
+  ASSERT_TRUE(cases.ok()) << cases.status().ToString();
+  EXPECT_EQ(cases->size(), 6u);
+  for (const auto& c : *cases) EXPECT_FALSE(c.voxel_derived) << c.scan;
+}
+
 TEST(Corpus, AFolderIsEveryScanInItAtItsDerivedSize) {
   SKIP_WITHOUT_DATA();
   ScratchDir dir;
