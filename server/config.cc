@@ -58,6 +58,13 @@ class Reader {
     out = std::move(values);
     return Status::Ok();
   }
+  // A sub-table ([nightly]); null when absent.
+  StatusOr<const toml::table*> Table(const char* key) {
+    const toml::node* node = Find(key);
+    if (!node) return static_cast<const toml::table*>(nullptr);
+    if (!node->as_table()) return Wrong(key, "a table");
+    return node->as_table();
+  }
   Status CheckAllRead() const {
     for (const auto& [key, value] : table_) {
       if (!read_.count(std::string(key.str()))) return InvalidArgument(origin_ + ": unknown key '" + std::string(key.str()) + "'");
@@ -79,6 +86,34 @@ class Reader {
 
 constexpr int64_t kInt = std::numeric_limits<int>::max();
 constexpr int64_t kHour = 3600;
+
+Status ParseNightly(const toml::table& table, NightlyConfig& nightly, const std::string& origin) {
+  Reader r(table, origin);
+  std::string corpus, reports_dir, command, time;
+  RETURN_IF_ERROR(r.String("corpus", corpus));
+  if (corpus.empty()) return InvalidArgument(origin + ": corpus is required (a corpus TOML file or a folder of scans)");
+  nightly.corpus = corpus;
+  RETURN_IF_ERROR(r.String("time", time));
+  if (!time.empty()) {
+    const auto two_digits = [&](size_t at, int max) {
+      int v = 0;
+      const auto [end, ec] = std::from_chars(time.data() + at, time.data() + at + 2, v);
+      return ec == std::errc() && end == time.data() + at + 2 && v >= 0 && v <= max ? v : -1;
+    };
+    const int hour = time.size() == 5 && time[2] == ':' ? two_digits(0, 23) : -1;
+    const int minute = time.size() == 5 && time[2] == ':' ? two_digits(3, 59) : -1;
+    if (hour < 0 || minute < 0) return InvalidArgument(origin + ": time must be \"HH:MM\" (UTC), got '" + time + "'");
+    nightly.hour = hour;
+    nightly.minute = minute;
+  }
+  RETURN_IF_ERROR(r.Int("interval_s", nightly.interval_s, 0, 366 * 24 * kHour));
+  RETURN_IF_ERROR(r.Int("reports_kept", nightly.reports_kept, 1, 100000));
+  RETURN_IF_ERROR(r.String("reports_dir", reports_dir));
+  if (!reports_dir.empty()) nightly.reports_dir = reports_dir;
+  RETURN_IF_ERROR(r.String("command", command));
+  if (!command.empty()) nightly.command = command;
+  return r.CheckAllRead();
+}
 
 }  // namespace
 
@@ -142,6 +177,8 @@ Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::s
   RETURN_IF_ERROR(r.Int("disk_reserve_mb", reserve_mb, 0, int64_t{1} << 30));
   h.disk_reserve_bytes = static_cast<uint64_t>(reserve_mb) << 20;
   RETURN_IF_ERROR(r.Int("check_threads", h.check_threads, 1, 64));
+  ASSIGN_OR_RETURN(const toml::table* nightly, r.Table("nightly"));
+  if (nightly) RETURN_IF_ERROR(ParseNightly(*nightly, config.nightly, origin + " [nightly]"));
   return r.CheckAllRead();
 }
 

@@ -29,6 +29,16 @@ struct HttpLimits {
   int check_threads = 2;               // threads that check uploads (off the HTTP threads)
 };
 
+// [nightly]: the compression benchmark on a schedule (server/nightly.h, docs/nightly.md).
+struct NightlyConfig {
+  std::filesystem::path corpus;        // empty: no schedule
+  int hour = 3, minute = 15;           // "time" = "HH:MM", UTC, once a day
+  int interval_s = 0;                  // > 0: every interval_s seconds instead (tests, staging)
+  size_t reports_kept = 30;
+  std::filesystem::path reports_dir;   // empty: data_dir/reports
+  std::filesystem::path command;       // the pointdag CLI; empty: beside pointdagd, else the build's
+};
+
 struct DaemonConfig {
   std::string host = "127.0.0.1";
   uint16_t port = 8080;
@@ -49,6 +59,7 @@ struct DaemonConfig {
   std::filesystem::path port_file;        // where to write the bound port (for --listen HOST:0)
   std::filesystem::path web_dir = POINTDAG_DEFAULT_WEB_DIR;  // the viewer (web/build.mjs output); empty: none
   HttpLimits http;
+  NightlyConfig nightly;
 };
 
 // "HOST:PORT" -> host and port.

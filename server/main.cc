@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 
 #include "check.h"
 #include "config.h"
+#include "nightly.h"
 #include "pointdag/gpu/stage_device.h"
 #include "pointdag/pipeline.h"
 #include "http_server.h"
@@ -128,11 +130,18 @@ int main(int argc, char** argv) {
   }
   service_config.web = std::make_shared<const WebFiles>(std::move(*web));
   service_config.tiles3d_cache_bytes = config.tiles3d_cache_mb << 20;
+  if (config.nightly.reports_dir.empty()) config.nightly.reports_dir = config.data_dir / "reports";
+  service_config.reports_dir = config.nightly.reports_dir;
   Service service(**store, jobs, metrics, service_config);
   HttpServer server(service, metrics, config.http_threads, config.http);
   auto port = server.Listen(config.host, config.port);
   if (!port.ok()) return Fail(1, port.status());
   jobs.Resume();
+  std::optional<NightlyRunner> nightly;
+  if (!config.nightly.corpus.empty()) {
+    nightly.emplace(config.nightly, metrics);
+    nightly->Start();
+  }
   service.set_ready(true);
   if (!config.port_file.empty()) {
     const auto partial = config.port_file.string() + ".partial";
@@ -150,6 +159,7 @@ int main(int argc, char** argv) {
                  config.web_dir.string());
   }
   server.Run();
+  if (nightly) nightly->Stop();  // a running benchmark is sent SIGTERM: it leaves no report behind
   if (jobs.running() > 0) {
     // An ingest cannot be interrupted midway; its job resumes from the upload on the next start,
     // and SQLite's WAL makes leaving now as safe as a crash.

@@ -1,5 +1,6 @@
 #include "metrics.h"
 
+#include <chrono>
 #include <sstream>
 
 namespace pointdag::server {
@@ -43,6 +44,36 @@ void Metrics::CountCorruptTile() {
 void Metrics::SetStageDevices(std::vector<StageDevice> stages) {
   std::lock_guard lock(mutex_);
   stages_ = std::move(stages);
+}
+
+void Metrics::SetNightly(NightlyStatus status) {
+  std::lock_guard lock(mutex_);
+  nightly_enabled_ = true;
+  if (status.ran) {
+    ++nightly_runs_;
+    nightly_last_run_unix_ = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  } else {
+    status.last_exit_code = nightly_.last_exit_code;
+  }
+  nightly_ = std::move(status);
+}
+
+void Metrics::RenderNightly(std::ostringstream& out) const {
+  out << "# HELP pointdag_nightly_runs_total Nightly benchmark runs finished since start.\n# TYPE pointdag_nightly_runs_total counter\n"
+      << "pointdag_nightly_runs_total " << nightly_runs_ << "\n"
+      << "# HELP pointdag_nightly_last_exit_code Exit code of the last run (0 ok, 1 error, 3 regression; -1 none yet).\n"
+      << "# TYPE pointdag_nightly_last_exit_code gauge\npointdag_nightly_last_exit_code " << nightly_.last_exit_code << "\n"
+      << "# HELP pointdag_nightly_last_run_timestamp_seconds When the last run finished (Unix time; 0 none since start).\n"
+      << "# TYPE pointdag_nightly_last_run_timestamp_seconds gauge\npointdag_nightly_last_run_timestamp_seconds "
+      << nightly_last_run_unix_ << "\n"
+      << "# HELP pointdag_nightly_last_duration_seconds Wall time of the last run.\n"
+      << "# TYPE pointdag_nightly_last_duration_seconds gauge\npointdag_nightly_last_duration_seconds " << nightly_.last_duration_s << "\n"
+      << "# HELP pointdag_nightly_bits_per_point The newest report's bits per point (geometry and colors), by scan, voxel and codec.\n"
+      << "# TYPE pointdag_nightly_bits_per_point gauge\n";
+  for (const auto& row : nightly_.rows) {
+    out << "pointdag_nightly_bits_per_point{report=\"" << LabelValue(nightly_.latest_report) << "\",scan=\"" << LabelValue(row.scan)
+        << "\",voxel=\"" << LabelValue(row.voxel) << "\",codec=\"" << LabelValue(row.codec) << "\"} " << row.bits_per_point << "\n";
+  }
 }
 
 std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state) const {
@@ -91,6 +122,7 @@ std::string Metrics::Render(const std::map<std::string, uint64_t>& jobs_by_state
     out << "pointdag_stage_calibration_seconds{stage=\"" << s.stage << "\",path=\"cpu\"} " << s.cpu_seconds << "\n"
         << "pointdag_stage_calibration_seconds{stage=\"" << s.stage << "\",path=\"vulkan\"} " << s.vulkan_seconds << "\n";
   }
+  if (nightly_enabled_) RenderNightly(out);
   return out.str();
 }
 

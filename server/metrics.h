@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,9 +26,24 @@ class Metrics {
     double cpu_seconds = 0, vulkan_seconds = 0;
   };
   void SetStageDevices(std::vector<StageDevice> stages);
+  // The nightly benchmark (nightly.h): its last run, and the newest report's bits per point per
+  // scan, voxel size and codec row ("vbr@38", "lossless", "draco").
+  struct NightlyStatus {
+    bool ran = false;  // a run just finished (false: the state found at start)
+    int last_exit_code = -1;
+    double last_duration_s = 0;
+    std::string latest_report;
+    struct Row {
+      std::string scan, voxel, codec;
+      double bits_per_point = 0;
+    };
+    std::vector<Row> rows;
+  };
+  void SetNightly(NightlyStatus status);
   std::string Render(const std::map<std::string, uint64_t>& jobs_by_state) const;
 
  private:
+  void RenderNightly(std::ostringstream& out) const;  // under mutex_
   static constexpr std::array<double, 12> kBuckets = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 5};
   mutable std::mutex mutex_;
   std::map<std::pair<std::string, int>, uint64_t> requests_;
@@ -39,6 +55,10 @@ class Metrics {
   double ingest_seconds_ = 0;
   double last_ingest_points_per_s_ = 0;
   std::vector<StageDevice> stages_;
+  bool nightly_enabled_ = false;
+  uint64_t nightly_runs_ = 0;
+  double nightly_last_run_unix_ = 0;
+  NightlyStatus nightly_;
 };
 
 }  // namespace pointdag::server

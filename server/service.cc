@@ -73,7 +73,8 @@ Service::Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig c
       access_(config_.token, config_.read_token, config_.require_token_for_reads),
       cors_(config_.cors_origins),
       cache_(config_.tile_cache_bytes),
-      tiles3d_(store_, metrics_, config_.tiles3d_cache_bytes) {}
+      tiles3d_(store_, metrics_, config_.tiles3d_cache_bytes),
+      reports_(config_.reports_dir) {}
 
 void Service::AddCors(HttpResponse& response, const std::string& origin) const {
   for (auto& [name, value] : cors_.Headers(origin)) response.SetHeader(name, value);
@@ -268,6 +269,12 @@ HttpResponse Service::Route(const HttpRequest& request) {
     r.body = metrics_.Render(*jobs);
     r.SetHeader("Content-Type", "text/plain; version=0.0.4");
     return r;
+  }
+  if (path == "/reports/latest.html" || (parts.size() >= 2 && parts[0] == "v1" && parts[1] == "reports")) {
+    const std::string route = path == "/reports/latest.html" ? path : parts.size() == 2 ? "/v1/reports" : "/v1/reports/{id}";
+    if (!get) return method_not_allowed(route, "GET");
+    if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+    return path == "/reports/latest.html" ? reports_.Latest() : reports_.Get({parts.begin() + 2, parts.end()});
   }
   if (parts.size() == 3 && parts[0] == "v1" && parts[1] == "jobs") {
     const std::string route = "/v1/jobs/{id}";

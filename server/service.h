@@ -15,6 +15,7 @@
 #include "answers.h"
 #include "jobs.h"
 #include "metrics.h"
+#include "reports_service.h"
 #include "store.h"
 #include "tile_cache.h"
 #include "tiles3d_service.h"
@@ -32,6 +33,7 @@ struct ServiceConfig {
   size_t tile_cache_bytes = size_t{256} << 20;
   std::shared_ptr<const WebFiles> web;  // the viewer's static files; null or empty: no viewer
   size_t tiles3d_cache_bytes = size_t{256} << 20;  // transcoded 3D Tiles contents and tilesets
+  std::filesystem::path reports_dir;  // the nightly benchmark's reports (reports_service.h)
 };
 
 class Service {
@@ -72,6 +74,7 @@ class Service {
   CorsPolicy cors_;
   TileCache cache_;
   Tiles3dService tiles3d_;
+  ReportsService reports_;
   bool ready_ = false;
 };
 

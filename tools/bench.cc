@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "pointdag/bench/report.h"
 #include "pointdag/color/block_codec.h"
 #include "pointdag/compare/draco_compare.h"
 #include "pointdag/compare/scorecard.h"
@@ -124,20 +125,6 @@ nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlo
   auto result = nlohmann::json::parse(text, nullptr, false);
   if (result.is_discarded()) return {{"scan", scan_name}, {"error", "benchmark child crashed"}};
   return result;
-}
-
-std::string MachineName() {
-  utsname u{};
-  uname(&u);
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line, model = "unknown CPU";
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      model = line.substr(line.find(':') + 2);
-      break;
-    }
-  }
-  return model + ", " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores, " + u.sysname + " " + u.machine;
 }
 
 namespace {
@@ -379,6 +366,7 @@ int RunBench(const BenchOptions& options) {
   if (options.colors) return RunColorBench(options);
   if (options.devices) return RunDeviceBench(options);
   if (options.laz) return RunLazBench(options);
+  if (!options.corpus.empty()) return RunCorpusBench(options);
   if (options.versus) return RunVersusBench(options);
   if (options.ingest) return RunIngestBench(options);
   const auto scans = ScansIn(options.data_dir);

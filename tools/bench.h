@@ -18,14 +18,19 @@ struct BenchOptions {
   bool laz = false;      // LAZ decoding (data_dir/laz): points/s on one core and all, LAZ vs LAS ingest
   bool versus = false;   // issue #14: ours, Draco and G-PCC side by side (sizes at equal PSNR-Y)
   uint64_t max_points_in_memory = uint64_t{1} << 25;
+  // The nightly benchmark (issue #15): a corpus (TOML or folder), the report folder, a baseline
+  // report (default: the newest in out_dir), the tolerances, and how many reports to keep (0: all).
+  std::string corpus, out_dir, baseline;
+  double size_tolerance = 0.005, psnr_tolerance = 0.05;
+  size_t keep_reports = 0;
 };
 
 int RunBench(const BenchOptions& options);
 int RunLazBench(const BenchOptions& options);  // tools/laz_bench.cc
 int RunVersusBench(const BenchOptions& options);  // tools/versus_bench.cc
+int RunCorpusBench(const BenchOptions& options);  // tools/corpus_bench.cc
 
-// Shared by the benchmarks. The CPU in words ("Intel Xeon ..., 2 threads").
-std::string MachineName();
+// Shared by the benchmarks.
 // Runs one case in a forked child, so each case's peak RSS is its own; its JSON comes back.
 nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlohmann::json()>& run_case);
 // IngestScan as pointdagd runs it on one scan: stage times, points/s, sizes, peak RSS.

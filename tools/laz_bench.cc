@@ -13,6 +13,7 @@
 #include <tbb/task_arena.h>
 
 #include "bench.h"
+#include "pointdag/bench/report.h"
 #include "pointdag/read/byte_io.h"
 #include "pointdag/read/laz/laz_reader.h"
 

@@ -314,6 +314,21 @@ int Main(int argc, char** argv) {
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
   bench->add_flag("--laz", bench_options.laz, "LAZ decoding of DATA/laz: points/s on one core and all; LAZ vs LAS ingest");
   bench->add_flag("--versus", bench_options.versus, "ours, Draco and G-PCC side by side: geometry, colors at 34/38/42 dB, lossless totals");
+  auto* corpus = bench->add_option("--corpus", bench_options.corpus,
+                                   "nightly benchmark: a corpus TOML file or a folder of scans (docs/nightly.md)")
+                     ->check(CLI::ExistingPath);
+  bench->add_option("--out", bench_options.out_dir, "where --corpus writes report-ID.json and .html")->needs(corpus);
+  corpus->needs(bench->get_option("--out"));
+  bench->add_option("--baseline", bench_options.baseline, "report to compare with (default: the newest in --out)")
+      ->check(CLI::ExistingFile)
+      ->needs(corpus);
+  bench->add_option("--size-tolerance", bench_options.size_tolerance, "relative growth of a size that fails the run")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  bench->add_option("--psnr-tolerance", bench_options.psnr_tolerance, "PSNR-Y drop in dB that fails the run")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  bench->add_option("--keep", bench_options.keep_reports, "reports kept in --out (0: all)")->capture_default_str();
 
   try {
     app.parse(argc, argv);

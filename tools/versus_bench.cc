@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bench.h"
+#include "pointdag/bench/report.h"
 #include "pointdag/compare/draco_compare.h"
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/pipeline.h"

@@ -6,9 +6,7 @@
 #include "pointdag/compare/point_metrics.h"
 
 namespace pointdag {
-namespace {
-
-StatusOr<double> VoxelSizeFromSpacing(ScanReader& reader) {
+StatusOr<double> DeriveVoxelSize(ScanReader& reader) {
   PointBatch batch;
   ASSIGN_OR_RETURN(const size_t n, reader.Read(batch, 1 << 16));
   RETURN_IF_ERROR(reader.Rewind());
@@ -17,8 +15,6 @@ StatusOr<double> VoxelSizeFromSpacing(ScanReader& reader) {
   if (!(spacing > 0)) return InvalidArgument("cannot derive a voxel size: the first points all coincide; pass voxel");
   return RoundUpTo125(spacing);
 }
-
-}  // namespace
 
 double RoundUpTo125(double spacing) {
   const double decade = std::pow(10.0, std::floor(std::log10(spacing)));
@@ -50,7 +46,7 @@ StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const Inges
   VoxelizeOptions vopt;
   vopt.voxel_size = options.voxel_size;
   if (!vopt.voxel_size) {
-    ASSIGN_OR_RETURN(vopt.voxel_size, VoxelSizeFromSpacing(*framed.reader));
+    ASSIGN_OR_RETURN(vopt.voxel_size, DeriveVoxelSize(*framed.reader));
     out.voxel_size_derived = true;
   }
   if (!(*vopt.voxel_size > 0) || !std::isfinite(*vopt.voxel_size)) return InvalidArgument("voxel size must be a positive number");

@@ -52,4 +52,9 @@ TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_
 // A voxel size from point spacing: the smallest 1-2-5 step (…, 0.1, 0.2, 0.5, 1, 2, …) >= spacing.
 double RoundUpTo125(double spacing);
 
+// The voxel size pointdagd gives a scan uploaded without one: RoundUpTo125 of the median spacing of
+// its first 65,536 points, in the reader's units; the reader is rewound. kInvalidArgument for a
+// scan without points or whose first points all coincide.
+StatusOr<double> DeriveVoxelSize(ScanReader& reader);
+
 }  // namespace pointdag

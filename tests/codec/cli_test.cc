@@ -12,25 +12,9 @@ namespace pointdag {
 namespace {
 
 using testing::DataDir;
+using testing::Cli;
+using testing::CliRun;
 using testing::ScratchDir;
-
-struct CliRun {
-  int exit_code;
-  std::string out, err;
-};
-
-// Runs the real `pointdag` binary, after `env` (VAR=value ...) when given; stderr is captured through a file.
-CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env = "") {
-  const auto err_path = dir / "stderr.txt";
-  const std::string command = (env.empty() ? "" : "env " + env + " ") + POINTDAG_CLI + " " + args + " 2>" + err_path.string();
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (size_t n; (n = fread(buf, 1, sizeof(buf), pipe)) > 0;) out.append(buf, n);
-  const int status = pclose(pipe);
-  const auto err = testing::ReadBytes(err_path);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, std::string(err.begin(), err.end())};
-}
 
 TEST(Cli, EncodeInfoDecodeRoundTrip) {
   SKIP_WITHOUT_DATA();

@@ -1,11 +1,26 @@
 #include "test_util.h"
 
+#include <sys/wait.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag::testing {
+
+CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env) {
+  const auto err_path = dir / "stderr.txt";
+  const std::string command = (env.empty() ? "" : "env " + env + " ") + POINTDAG_CLI + " " + args + " 2>" + err_path.string();
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (size_t n; (n = fread(buf, 1, sizeof(buf), pipe)) > 0;) out.append(buf, n);
+  const int status = pclose(pipe);
+  const auto err = ReadBytes(err_path);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, std::string(err.begin(), err.end())};
+}
 
 std::vector<uint64_t> SurfaceVoxels(int depth, size_t approx, uint32_t seed) {
   std::mt19937 rng(seed);

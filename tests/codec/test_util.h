@@ -49,6 +49,14 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
+struct CliRun {
+  int exit_code;
+  std::string out, err;
+};
+
+// Runs the real `pointdag` binary, after `env` (VAR=value ...) when given; stderr is captured through a file.
+CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env = "");
+
 inline void WriteBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));

@@ -100,6 +100,10 @@ TEST(DaemonStart, ConfigMistakesStopTheStart) {
       {"header_timeout = 5\n", "unknown key 'header_timeout'"},
       {"log_level = \"loud\"\n", "log_level must be trace, debug"},
       {"listen = \n", "pointdagd.toml"},
+      {"nightly = 1\n", "nightly must be a table"},
+      {"[nightly]\ntime = \"03:15\"\n", "[nightly]: corpus is required"},
+      {"[nightly]\ncorpus = \"c.toml\"\ntime = \"25:00\"\n", "time must be \"HH:MM\" (UTC), got '25:00'"},
+      {"[nightly]\ncorpus = \"c.toml\"\nkept = 3\n", "[nightly]: unknown key 'kept'"},
   };
   for (const auto& [toml, message] : cases) {
     std::ofstream(scratch / "pointdagd.toml") << toml;

@@ -7,7 +7,7 @@
 
 namespace pointdag {
 
-StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
+StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan, std::span<const double> targets) {
   ASSIGN_OR_RETURN(const std::vector<uint8_t> zstd_stream, EncodeDag(scan.dag, GeometryCoder::kZstd));
   ASSIGN_OR_RETURN(const DracoResult draco, DracoEncodeVoxels(scan.grid));
   const double voxels = static_cast<double>(scan.grid.morton.size());
@@ -23,12 +23,12 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
   if (scan.grid.has_color()) {
     std::vector<ColorEncodeOptions> trials;
     for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
-      for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target});
+      for (double target : targets) trials.push_back({codec, target});
     }
     // The 2D mapping (Paper IIA) along both curves.
     for (Curve curve : {Curve::kHilbert, Curve::kMorton}) {
       for (ColorCodec codec : {ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc}) {
-        for (double target : {30.0, 34.0, 38.0, 42.0}) trials.push_back({codec, target, 16.0, curve});
+        for (double target : targets) trials.push_back({codec, target, 16.0, curve});
       }
       trials.push_back({ColorCodec::kPng, std::nullopt, 16.0, curve});
     }
@@ -69,7 +69,8 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan) {
                     {"d1_psnr", finite_or_null(original.d1_psnr())},
                     {"psnr_y_voxel_colors", finite_or_null(original.ColorPsnrY(scan.grid.colors))}}},
       {"draco_bits_per_point", draco.bits_per_point},
-      {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}, {"level10_encode_s", draco.level10_seconds}}},
+      {"draco", {{"bytes", draco.bytes}, {"method", draco.method}, {"speed", draco.speed}, {"level10_encode_s", draco.level10_seconds},
+                 {"decode_s", draco.decode_seconds}}},
       {"codecs", codecs},
   };
 }
