@@ -20,6 +20,8 @@
 namespace pointdag {
 namespace {
 
+using testing::Cli;
+using testing::CliRun;
 using testing::DataDir;
 using testing::ReadGlb;
 using testing::ScratchDir;
@@ -248,18 +250,6 @@ TEST(Tileset, RefusesMalformedDescriptions) {
   EXPECT_EQ(parse(R"({"georeferenced": true, "enu_to_ecef": )" + m15 + "}"), StatusCode::kMalformed);
   EXPECT_EQ(parse(R"({"georeferenced": true, "enu_to_ecef": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,"1"]})"), StatusCode::kMalformed);
   EXPECT_EQ(parse(R"({"georeferenced": true, "enu_to_ecef": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})"), StatusCode::kOk);
-}
-
-struct CliRun {
-  int exit_code;
-  std::string err;
-};
-
-CliRun Cli(const std::string& args, const ScratchDir& dir) {
-  const auto err_path = dir / "stderr.txt";
-  const int status = std::system((std::string(POINTDAG_CLI) + " " + args + " >/dev/null 2>" + err_path.string()).c_str());
-  const auto err = testing::ReadBytes(err_path);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, std::string(err.begin(), err.end())};
 }
 
 // Every content of an exported tileset, by uri, with the finest level's points gathered.
