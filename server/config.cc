@@ -151,6 +151,7 @@ Status ParseConfigText(std::string_view text, DaemonConfig& config, const std::s
   RETURN_IF_ERROR(r.Int("http_threads", config.http_threads, 1, 256));
   RETURN_IF_ERROR(r.Int("queue_size", config.queue_size, 1, 1 << 20));
   RETURN_IF_ERROR(r.Int("max_attempts", config.max_attempts, 1, 100));
+  RETURN_IF_ERROR(r.Int("shutdown_grace_s", config.shutdown_grace_s, 0, 24 * kHour));
   RETURN_IF_ERROR(r.Int("max_upload_bytes", config.max_upload_bytes, 1, std::numeric_limits<int64_t>::max()));
   RETURN_IF_ERROR(r.Int("tile_cache_mb", config.tile_cache_mb, 0, 1 << 20));
   RETURN_IF_ERROR(r.Int("tiles3d_cache_mb", config.tiles3d_cache_mb, 0, 1 << 20));

@@ -51,6 +51,7 @@ struct DaemonConfig {
   int http_threads = 2;                   // threads serving HTTP
   size_t queue_size = 16;                 // jobs waiting beyond the running ones
   int max_attempts = 2;                   // a job that failed or crashed this often is not resumed
+  int shutdown_grace_s = 8;               // SIGTERM: running jobs may finish within it (docker stop waits 10 s)
   uint64_t max_upload_bytes = uint64_t{4} << 30;
   size_t tile_cache_mb = 256;
   size_t tiles3d_cache_mb = 256;          // transcoded 3D Tiles (tilesets and .glb contents)

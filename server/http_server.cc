@@ -111,12 +111,14 @@ struct HttpServer::Impl {
   Metrics& metrics;
   const HttpLimits limits;
   int threads;
-  asio::io_context io;
-  tcp::acceptor acceptor{io};
-  asio::thread_pool checks;  // uploads' checks (FinishUpload → OpenScan), never on an HTTP thread
+  // Declared before `io`, so destroyed after it: a stop leaves sessions suspended in `io`, and
+  // destroying their frames gives their connection slots back into these.
   std::atomic<int> connections{0}, uploads{0};
   std::mutex clients_mutex;
   std::map<asio::ip::address, int> per_client;
+  asio::io_context io;
+  tcp::acceptor acceptor{io};
+  asio::thread_pool checks;  // uploads' checks (FinishUpload → OpenScan), never on an HTTP thread
 
   Impl(Service& s, Metrics& m, int t, const HttpLimits& l)
       : service(s), metrics(m), limits(l), threads(t), io(t), checks(static_cast<size_t>(l.check_threads)) {}

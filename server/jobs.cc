@@ -118,6 +118,14 @@ bool JobQueue::Submit(const std::string& job_id) {
   return true;
 }
 
+std::vector<std::string> JobQueue::Drain(std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock lock(mutex_);
+  draining_ = true;
+  wake_.notify_all();
+  idle_.wait_until(lock, deadline, [this] { return running_ == 0; });
+  return {running_ids_.begin(), running_ids_.end()};
+}
+
 size_t JobQueue::running() const {
   std::lock_guard lock(mutex_);
   return running_;
@@ -141,7 +149,7 @@ void JobQueue::Work() {
     std::string id;
     {
       std::unique_lock lock(mutex_);
-      const auto ready = [this] { return stopping_ || !queue_.empty(); };
+      const auto ready = [this] { return stopping_ || draining_ || !queue_.empty(); };
       if (all_written) {
         wake_.wait(lock, ready);
       } else if (!wake_.wait_for(lock, kRetryPending, ready)) {
@@ -149,15 +157,20 @@ void JobQueue::Work() {
         all_written = FlushPending();
         continue;
       }
-      if (stopping_) return;
+      if (stopping_ || draining_) return;
       id = queue_.front();
       queue_.pop_front();
       ++running_;
+      running_ids_.insert(id);
     }
     Run(id);
     all_written = FlushPending();
-    std::lock_guard lock(mutex_);
-    --running_;
+    {
+      std::lock_guard lock(mutex_);
+      --running_;
+      running_ids_.erase(id);
+    }
+    idle_.notify_all();
   }
 }
 

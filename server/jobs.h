@@ -16,11 +16,13 @@
 // mid-upload).
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -54,6 +56,9 @@ class JobQueue {
   size_t waiting() const;
   bool full() const { return waiting() >= limits_.capacity; }
   size_t running() const;
+  // A clean stop: no queued job starts any more; waits until the running ones end or `deadline`
+  // passes. Returns the ids of those still running then (their ingests cannot be cut short).
+  std::vector<std::string> Drain(std::chrono::steady_clock::time_point deadline);
   // The end of a job that the store could not record yet, if any: the truth about that job.
   std::optional<PendingEnd> Pending(const std::string& job_id) const;
 
@@ -73,7 +78,10 @@ class JobQueue {
   std::condition_variable wake_;
   std::deque<std::string> queue_;
   size_t running_ = 0;
+  std::set<std::string> running_ids_;
+  std::condition_variable idle_;  // running_ fell
   bool stopping_ = false;
+  bool draining_ = false;
   std::map<std::string, PendingEnd> pending_;
   std::vector<std::thread> workers_;
 };

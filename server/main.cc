@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -160,14 +161,24 @@ int main(int argc, char** argv) {
   }
   server.Run();
   if (nightly) nightly->Stop();  // a running benchmark is sent SIGTERM: it leaves no report behind
-  if (jobs.running() > 0) {
-    // An ingest cannot be interrupted midway; its job resumes from the upload on the next start,
-    // and SQLite's WAL makes leaving now as safe as a crash.
-    spdlog::info("leaving with {} job(s) running: they resume on the next start", jobs.running());
+  // A clean stop (SIGTERM, docker stop): no queued job starts now; the running ones get the grace
+  // period to finish and commit.
+  const size_t running = jobs.running();
+  const auto unfinished = jobs.Drain(std::chrono::steady_clock::now() + std::chrono::seconds(config.shutdown_grace_s));
+  if (!unfinished.empty()) {
+    // An ingest cannot be cut short midway: it resumes from its upload on the next start (SQLite's
+    // WAL makes leaving now as safe as a crash), and a clean stop is not counted as an attempt.
+    for (const std::string& id : unfinished) {
+      if (const Status s = (**store).ReturnAttempt(id); !s.ok()) spdlog::warn("job {}: {}", id, s.ToString());
+    }
+    spdlog::info("leaving with {} job(s) still running after the {} s grace period: they resume on the next start",
+                 unfinished.size(), config.shutdown_grace_s);
     // A job that has just committed its dataset may not have removed its upload yet: leave no
     // orphan behind for `pointdagd --check` (the running ones' uploads and spill files stay).
     (void)SweepLeftovers(**store, config.data_dir, /*keep_spill=*/true);
     std::_Exit(0);
   }
+  if (running > 0) spdlog::info("finished {} running job(s) before leaving", running);
+  spdlog::info("stopped");
   return 0;
 }

@@ -126,6 +126,12 @@ Status Store::StartAttempt(const std::string& id) {
   return s.Bind(Now(), id).Run();
 }
 
+Status Store::ReturnAttempt(const std::string& id) {
+  std::lock_guard lock(write_mutex_);
+  Statement s(writer_, "UPDATE jobs SET attempts=MAX(attempts-1, 0), updated=? WHERE id=? AND state='running'");
+  return s.Bind(Now(), id).Run();
+}
+
 Status Store::UpdateJobProgress(const std::string& id, const std::string& stage, double percent, uint64_t points_in,
                                 uint64_t voxels_out) {
   std::lock_guard lock(write_mutex_);

@@ -66,6 +66,9 @@ class Store {
   // The job is running from now: state running, stage survey, attempts + 1 — before any work, so a
   // run that takes the process down is counted.
   Status StartAttempt(const std::string& id);
+  // A running job left unfinished by a clean stop (its grace period over): not a crash, so the
+  // attempt StartAttempt counted is given back; the job resumes from its upload on the next start.
+  Status ReturnAttempt(const std::string& id);
   // Best effort: fails at once when another process holds the lock.
   Status UpdateJobProgress(const std::string& id, const std::string& stage, double percent, uint64_t points_in,
                            uint64_t voxels_out);

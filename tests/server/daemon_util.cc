@@ -68,12 +68,13 @@ bool Daemon::Start() {
   return true;
 }
 
-void Daemon::Stop(int signal) {
-  if (pid_ <= 0) return;
+int Daemon::Stop(int signal) {
+  if (pid_ <= 0) return -1;
   kill(pid_, signal);
   int status = 0;
   waitpid(pid_, &status, 0);
   pid_ = -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 std::unique_ptr<client::Connection> Daemon::Connect() const {

@@ -42,7 +42,8 @@ class Daemon {
   // the daemon's log, leaves started() false and returns false.
   bool Start();
   bool started() const { return port_ != 0; }
-  void Stop(int signal);
+  // Sends `signal` and waits: the exit code, 128 + the signal that ended it, or -1 when none ran.
+  int Stop(int signal);
   pid_t pid() const { return pid_; }
   std::string Log() const;
   std::filesystem::path var() const { return data_dir_ / "var"; }
