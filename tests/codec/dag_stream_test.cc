@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <string>
+
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/dag/dag_stream.h"
 #include "pointdag/entropy/binary_range_coder.h"
@@ -98,6 +102,25 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
         EXPECT_TRUE(decoded->Validate().ok());  // a flip may still decode to some valid DAG
       }
     }
+  }
+}
+
+// Version 1 streams (coder 2 without edge neighbours) still decode: the fuzz seeds of tiny at 40 ft
+// in both versions hold one DAG, and writers write version 2.
+TEST(DagStream, SpatialVersion1StillDecodes) {
+  const auto read = [](const char* name) {
+    std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
+    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const char* mode : {"leaves", "mipmap"}) {
+    const auto v1 = read((std::string(mode) + "_spatial.bin").c_str());
+    const auto v2 = read((std::string(mode) + "_spatial_v2.bin").c_str());
+    ASSERT_EQ(v1.at(0), 1);
+    ASSERT_EQ(v2.at(0), 2);
+    const Svdag dag = DecodeDag(v1).value();
+    EXPECT_EQ(DecodeDag(v2).value(), dag);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v2);
+    EXPECT_LT(v2.size(), v1.size());
   }
 }
 

@@ -3,8 +3,10 @@
 // ignores, in the same voxels), quickly, without a crash, and the JavaScript decoder must fail
 // exactly where the C++ one (compiled to WebAssembly) fails: at the same check, or with the same output.
 import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
 import { before, describe, test } from 'node:test';
 
+import { decodeDag } from '../../web/src/decoder/dag_stream.js';
 import { PdagError, decodePdag } from '../../web/src/decoder/decode_pdag.js';
 import { WASM_SKIPPED, config, loadWasm, scan } from './lib/config.mjs';
 import { denseCube, framePdag, sectionsOf, utf8, varint, writeGeometry } from './lib/pdag_writer.mjs';
@@ -199,5 +201,20 @@ describe('hostile tiles', () => {
     const source = JSON.parse(new TextDecoder().decode(m[1]));
     source.source = 5;
     assert.equal(both(framePdag([['meta', utf8(JSON.stringify(source))], g, c]), 'metadata source 5').code, 'Corrupt');
+  });
+});
+
+// Geometry stream version 1 (coder 2 without edge neighbours) still decodes: the fuzz seeds of tiny
+// at 40 ft in both versions hold one DAG (tests/codec/dag_stream_test.cc checks the same in C++).
+describe('geometry stream versions', () => {
+  test('coder 2 version 1 and version 2 decode to the same DAG', () => {
+    const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/dag_stream/${name}`, import.meta.url)));
+    for (const mode of ['leaves', 'mipmap']) {
+      const v1 = seed(`${mode}_spatial.bin`);
+      const v2 = seed(`${mode}_spatial_v2.bin`);
+      assert.equal(v1[0], 1);
+      assert.equal(v2[0], 2);
+      assert.deepEqual(decodeDag(v2), decodeDag(v1));
+    }
   });
 });

@@ -18,7 +18,8 @@
 namespace pointdag {
 namespace {
 
-constexpr uint8_t kStreamVersion = 1;
+// Version 2 changes coder 2's mask contexts only (PDAG_FORMAT §2.2); version 1 streams still decode.
+constexpr uint8_t kStreamVersion = 2;
 constexpr int kZstdLevel = 19;
 
 // Mask contexts: internal nodes by height (3..21), brick cell masks, brick voxel masks. Measured:
@@ -255,7 +256,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
     for (uint64_t brick : arrays.leaves) {
       if (!seen.insert(brick).second) return InvalidArgument("geometry coder 2 needs each brick stored once: one repeats");
     }
-    ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth));
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth, kStreamVersion));
     out.insert(out.end(), payload.begin(), payload.end());
     return out;
   }
@@ -271,7 +272,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
-  if (bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[0] != 1 && bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
   if (bytes[1] > 2) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];
@@ -309,7 +310,7 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
       ContextSource source(bytes.subspan(pos));
       arrays = ReadSymbols(source, depth, counts);
     } else {
-      arrays = DecodeSpatial(bytes.subspan(pos), depth, counts);
+      arrays = DecodeSpatial(bytes.subspan(pos), depth, counts, bytes[0]);
     }
   }
   if (!arrays.ok()) return arrays.status();

@@ -14,11 +14,13 @@ namespace {
 
 // Classes by height: 1 = voxel masks of brick cells, 2 = brick cell masks, 3.. = internal nodes.
 constexpr int kClasses = kMaxDepth + 1;
-// Mask bit context: set bits so far (0..3); the known lower neighbours on the child's level (3 bits);
-// per axis, whether the parent's neighbour on the child's side exists, else whether the one on the
-// other side does (3 states). Measured: the child's octant, the full 6-neighbour pattern or a count
-// of the known cells around the child dilute the statistics (+0.3..3% on lion, autzen, milk).
-constexpr int kMaskContexts = 4 * 8 * 27;
+// Mask bit context: set bits so far (0..3; version 2: 0..1); the known lower neighbours on the
+// child's level (3 bits); per axis, whether the parent's neighbour on the child's side exists, else
+// whether the one on the other side does (3 states); version 2 adds two bits from the edge and
+// corner neighbours (outer, lower_diagonal below). Measured: the child's octant, the full
+// 6-neighbour pattern or a count of the known cells around the child dilute the statistics
+// (+0.3..3% on lion, autzen, milk); counts of edge neighbours rather than the two thresholds, too.
+constexpr int kMaskContexts = 4 * 8 * 27 * 4;
 
 struct SpatialModels {
   std::array<std::array<YoungBitModel, kMaskContexts>, kClasses> mask;
@@ -30,8 +32,8 @@ struct SpatialModels {
 struct Level {
   std::vector<uint32_t> id;     // node ordinal (internal), brick index, or brick * 8 + cell
   std::vector<uint8_t> first;   // first occurrence: its mask and children are coded here
-  std::vector<uint8_t> mask;    // filled as the level is coded
-  std::vector<std::array<int32_t, 6>> nbr;  // -x, +x, -y, +y, -z, +z on this level; -1: empty or unknown
+  std::vector<uint8_t> mask;    // filled as the level is coded; then a sentinel 0
+  std::vector<std::array<int32_t, 6>> nbr;  // -x, +x, -y, +y, -z, +z on this level; -1: empty or unknown; then a sentinel row
   std::vector<uint32_t> kids;   // internal first occurrences: where their children start in DagArrays::children
   size_t size() const { return id.size(); }
   void Add(uint32_t node, bool is_first, const std::array<int32_t, 6>& n) {
@@ -127,9 +129,77 @@ constexpr auto kFacing = [] {
   return t;
 }();
 
-// Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is implied.
+// Child c's lower diagonal neighbours on its level lie at offsets −1 on the axes of o = 6, 5, 3, 7
+// (xy, xz, yz, xyz): in the cell at parent offset o & ~c (bit 4 >> axis: −1 on that axis), child
+// c ^ o. kDiagonalFrom[p][mask]: bit c when one of them lies in the cell at offset p != 0 and is
+// set in its mask; kDiagonalSelf[c]: the bits of the mask so far that are such neighbours of c.
+constexpr std::array<int, 4> kDiagonalOffsets = {6, 5, 3, 7};
+constexpr auto kDiagonalFrom = [] {
+  std::array<std::array<uint8_t, 256>, 8> t{};
+  for (int c = 0; c < 8; ++c) {
+    for (int o : kDiagonalOffsets) {
+      for (unsigned m = 0; m < 256; ++m) {
+        if ((o & ~c) != 0 && ((m >> (c ^ o)) & 1u)) t[o & ~c][m] = static_cast<uint8_t>(t[o & ~c][m] | 1u << c);
+      }
+    }
+  }
+  return t;
+}();
+constexpr auto kDiagonalSelf = [] {
+  std::array<uint8_t, 8> t{};
+  for (int c = 0; c < 8; ++c) {
+    for (int o : kDiagonalOffsets) {
+      if ((o & ~c) == 0) t[c] = static_cast<uint8_t>(t[c] | 1u << (c ^ o));
+    }
+  }
+  return t;
+}();
+
+// Version 2's view of a cell beyond its faces, through face links only: a neighbour that no
+// existing face neighbour leads to counts as empty (no search). Lookups go through the level's
+// sentinel row (index size(): no neighbours, mask 0) rather than branches.
+struct Around {
+  uint8_t outer = 0;     // bit c: at least 2 of the 3 edge and 1 corner neighbours on octant c's side exist
+  uint8_t diagonal = 0;  // bit c: a lower diagonal neighbour of child c outside the cell is set
+};
+
+Around Surroundings(const Level& lv, size_t i) {
+  const int32_t none = static_cast<int32_t>(lv.size());
+  const auto step = [&](int32_t at, int d) { return lv.nbr[at < 0 ? none : at][d]; };
+  const auto& f = lv.nbr[i];
+  const auto edge = [&](int d1, int d2) {
+    const int32_t e = step(f[d1], d2), other = step(f[d2], d1);
+    return e >= 0 ? e : other;
+  };
+  std::array<std::array<int32_t, 2>, 2> xy, xz, yz;  // [side][side], 0 = −, 1 = +
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      xy[a][b] = edge(a, 2 + b);
+      xz[a][b] = edge(a, 4 + b);
+      yz[a][b] = edge(2 + a, 4 + b);
+    }
+  }
+  Around out;
+  int32_t lower_corner = -1;
+  for (int c = 0; c < 8; ++c) {
+    const int x = (c >> 2) & 1, y = (c >> 1) & 1, z = c & 1;
+    const int32_t c1 = step(xy[x][y], 4 + z), c2 = step(xz[x][z], 2 + y), c3 = step(yz[y][z], x);
+    const int near = (xy[x][y] >= 0) + (xz[x][z] >= 0) + (yz[y][z] >= 0) + ((c1 & c2 & c3) >= 0);
+    out.outer = static_cast<uint8_t>(out.outer | (near >= 2 ? 1u << c : 0u));
+    if (c == 0) lower_corner = c1 >= 0 ? c1 : c2 >= 0 ? c2 : c3;
+  }
+  const auto mask = [&](int32_t at) { return lv.mask[at < 0 ? none : at]; };
+  out.diagonal = static_cast<uint8_t>(kDiagonalFrom[4][mask(f[0])] | kDiagonalFrom[2][mask(f[2])] |
+                                      kDiagonalFrom[1][mask(f[4])] | kDiagonalFrom[6][mask(xy[0][0])] |
+                                      kDiagonalFrom[5][mask(xz[0][0])] | kDiagonalFrom[3][mask(yz[0][0])] |
+                                      kDiagonalFrom[7][mask(lower_corner)]);
+  return out;
+}
+
+// Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is
+// implied. `edges`: version 2's contexts.
 template <typename Io>
-uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth) {
+uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth, bool edges) {
   unsigned exists = 0;
   uint32_t facing = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -141,16 +211,23 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
     if (lv.nbr[i][2 * axis + 1] >= 0) exists |= 8u << axis;
   }
   const auto& sides = kSides[exists];
+  const Around around = edges ? Surroundings(lv, i) : Around{};
+  const unsigned most = edges ? 1 : 3;
   unsigned m = 0;
-  unsigned ones = 0;  // set bits so far, at most 3
+  unsigned ones = 0;  // set bits so far, at most `most`
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
       const unsigned lower = ((facing >> (4 * c)) & 7u) | kSiblings[c][m];
-      bit = io.Bit(models[(ones * 8 + lower) * 27 + sides[c]], (truth >> c) & 1);
+      unsigned extra = 0;  // outer, then whether any lower diagonal neighbour is set
+      if (edges) {
+        const bool diagonal = ((around.diagonal >> c) & 1u) || (m & kDiagonalSelf[c]);
+        extra = ((around.outer >> c) & 1u) * 2 + (diagonal ? 1u : 0u);
+      }
+      bit = io.Bit(models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra], (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;
-    ones += ones < 3 ? static_cast<unsigned>(bit) : 0u;
+    ones += ones < most ? static_cast<unsigned>(bit) : 0u;
   }
   return static_cast<uint8_t>(m);
 }
@@ -166,13 +243,24 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
     }
   }
   Level next;
-  next.id.reserve(total);
-  next.first.reserve(total);
-  next.nbr.reserve(total);
+  next.id.resize(total);
+  next.first.resize(total);
+  next.nbr.reserve(total + 1);
+  next.nbr.resize(total);
   uint32_t fresh = 0;  // new ordinals assigned so far: ordinals are numbered in this order
+  int32_t j = 0;
   for (size_t i = 0; i < cur.size(); ++i) {
     if (base[i] < 0) continue;
     const unsigned mask = cur.mask[i];
+    // Per side, the cell whose children lie there (outside: the neighbour; mask 0 unless expanded).
+    std::array<int32_t, 6> side_base;
+    std::array<unsigned, 6> side_mask;
+    for (int d = 0; d < 6; ++d) {
+      const int32_t owner = cur.nbr[i][d];
+      const bool expanded = owner >= 0 && base[owner] >= 0;
+      side_base[d] = expanded ? base[owner] : 0;
+      side_mask[d] = expanded ? cur.mask[owner] : 0u;
+    }
     for (int c = 0, r = 0; c < 8; ++c) {
       if (!((mask >> c) & 1u)) continue;
       uint32_t id;
@@ -189,17 +277,18 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
         is_first = cur.first[i];
       }
       ++r;
-      std::array<int32_t, 6> n;
+      auto& n = next.nbr[j];
       for (int d = 0; d < 6; ++d) {
         const int bit = 4 >> (d / 2);
         const bool inside = (d & 1) ? !(c & bit) : (c & bit);
         const int sib = c ^ bit;
-        const int32_t owner = inside ? static_cast<int32_t>(i) : cur.nbr[i][d];
-        n[d] = owner >= 0 && base[owner] >= 0 && ((cur.mask[owner] >> sib) & 1u)
-                   ? base[owner] + Rank(cur.mask[owner], sib)
-                   : -1;
+        const unsigned owner_mask = inside ? mask : side_mask[d];
+        const int32_t owner_base = inside ? base[i] : side_base[d];
+        n[d] = ((owner_mask >> sib) & 1u) ? owner_base + Rank(owner_mask, sib) : -1;
       }
-      next.Add(id, is_first, n);
+      next.id[j] = id;
+      next.first[j] = is_first ? 1 : 0;
+      ++j;
     }
   }
   return next;
@@ -209,7 +298,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
 // Bricks carry no back-references: every brick slot (a child of a new node of the last internal
 // level) is coded in full, `slots` holding its value, and the decoder merges equal bricks.
 template <typename Io, typename Arrays>
-Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots) {
+Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots, bool edges) {
   const int levels = depth - 2;
   auto models = std::make_unique<SpatialModels>();
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
@@ -219,11 +308,13 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
     for (int c = 0; c < 8; ++c) cells = static_cast<uint8_t>(cells | (((slots[id] >> (8 * c)) & 0xFFu) ? 1u << c : 0u));
     return cells;
   };
+  constexpr std::array<int32_t, 6> kNone = {-1, -1, -1, -1, -1, -1};
   Level cur;
-  cur.Add(0, true, {-1, -1, -1, -1, -1, -1});
+  cur.Add(0, true, kNone);
   for (int level = 0; level < depth; ++level) {
     const int height = depth - level;
-    cur.mask.assign(cur.size(), 0);
+    cur.nbr.push_back(kNone);  // the sentinel row (Surroundings)
+    cur.mask.assign(cur.size() + 1, 0);
     cur.kids.assign(cur.size(), 0);
     uint32_t seen = 0;  // nodes of the next level referenced so far
     size_t child = 0;   // encoder: position in a.children[level]
@@ -233,7 +324,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
         cur.mask[i] = known_mask(level, id);
         continue;
       }
-      const uint8_t mask = CodeMask(io, models->mask[height], cur, i, Io::kEncoding ? known_mask(level, id) : 0);
+      const uint8_t mask = CodeMask(io, models->mask[height], cur, i, Io::kEncoding ? known_mask(level, id) : 0, edges);
       cur.mask[i] = mask;
       if constexpr (!Io::kEncoding) {
         if (level < levels) a.masks[level].push_back(mask);
@@ -272,7 +363,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
 
 }  // namespace
 
-StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth) {
+StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth, int version) {
   EncoderIo io;
   std::vector<uint64_t> counts;
   for (const auto& m : arrays.masks) counts.push_back(m.size());
@@ -283,11 +374,12 @@ StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth)
   } else {
     for (uint32_t k : arrays.children.back()) slots.push_back(arrays.leaves[k]);
   }
-  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots));
+  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots, version >= 2));
   return io.Finish();
 }
 
-StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts) {
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts,
+                                  int version) {
   const int levels = depth - 2;
   DagArrays a;
   a.masks.resize(levels);
@@ -295,7 +387,7 @@ StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, c
   for (int level = 0; level < levels; ++level) a.masks[level].reserve(counts[level]);
   std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
   DecoderIo io(payload);
-  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots));
+  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version >= 2));
   // Equal bricks become one, numbered in the order first seen: the canonical order.
   std::unordered_map<uint64_t, uint32_t> index;
   index.reserve(counts[levels]);

@@ -23,9 +23,12 @@ namespace pointdag {
 // implied): a byte of payload holds fewer than 8 / (7 x 0.0014) < 820 nodes.
 constexpr uint64_t kMaxSpatialNodesPerByte = 820;
 
-StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth);
+// `version`: the geometry stream's (PDAG_FORMAT §2.2): 2 adds edge and corner neighbours to the
+// mask contexts, 1 does without.
+StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth, int version);
 
 // `counts`: nodes per internal level, then bricks (the stream's level table, already checked).
-StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts);
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts,
+                                  int version);
 
 }  // namespace pointdag

@@ -7,7 +7,7 @@ import { GrowableU32 } from './growable_u32.js';
 import { GAMMA_MODELS, bitWidth, newModels } from './range_coder.js';
 
 const CLASSES = 22;  // heights 0..21
-const MASK_CONTEXTS = 4 * 8 * 27;
+const MASK_CONTEXTS = 4 * 8 * 27 * 4;
 const FLAG_BASE = 0;
 const REF_BASE = CLASSES;
 const POP = Uint8Array.from({ length: 256 }, (_, i) => {
@@ -17,8 +17,11 @@ const POP = Uint8Array.from({ length: 256 }, (_, i) => {
 });
 const rank = (mask, bit) => POP[mask & ((1 << bit) - 1)];
 
+// Cells 0..n−1 and a sentinel row n (no neighbours, mask 0) that version 2's lookups go through.
 function newLevel(n) {
-  return { n, id: new Uint32Array(n), first: new Uint8Array(n), nbr: new Int32Array(6 * n), mask: new Uint8Array(n), kids: new Uint32Array(n) };
+  const nbr = new Int32Array(6 * (n + 1));
+  nbr.fill(-1, 6 * n);
+  return { n, id: new Uint32Array(n), first: new Uint8Array(n), nbr, mask: new Uint8Array(n + 1), kids: new Uint32Array(n) };
 }
 
 // The context's parts as tables, as spatial_coder.cc builds them: SIDES[exists * 8 + c] (exists =
@@ -55,8 +58,67 @@ for (let axis = 0; axis < 3; ++axis) {
   }
 }
 
-// The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied.
-function decodeMask(rc, young, age, base, lv, i) {
+// Child c's lower diagonal neighbours on its level (offsets −1 on the axes of 6, 5, 3, 7), as
+// spatial_coder.cc's tables: DIAGONAL_FROM[p * 256 + mask] (bit c: one lies in the cell at parent
+// offset p != 0 and is set), DIAGONAL_SELF[c] (the bits of the mask so far that are such neighbours).
+const DIAGONAL_FROM = new Uint8Array(8 * 256);
+const DIAGONAL_SELF = new Uint8Array(8);
+for (let c = 0; c < 8; ++c) {
+  for (const o of [6, 5, 3, 7]) {
+    const p = o & ~c;
+    if (p === 0) DIAGONAL_SELF[c] |= 1 << (c ^ o);
+    else for (let m = 0; m < 256; ++m) if ((m >> (c ^ o)) & 1) DIAGONAL_FROM[p * 256 + m] |= 1 << c;
+  }
+}
+
+// Version 2's view beyond the faces, as spatial_coder.cc's Surroundings (through the sentinel row
+// `none`): returns outer (bits 0..7: at least 2 of octant c's 3 edge and 1 corner neighbours exist)
+// | diagonal << 8 (bit c: a lower diagonal neighbour of child c outside the cell is set).
+function surroundings(lv, i, edges) {
+  const nbr = lv.nbr;
+  const none = lv.n;
+  const o = 6 * i;
+  for (let a = 0; a < 2; ++a) {
+    for (let b = 0; b < 2; ++b) {
+      edges[a * 2 + b] = edge(nbr, none, o, a, 2 + b);
+      edges[4 + a * 2 + b] = edge(nbr, none, o, a, 4 + b);
+      edges[8 + a * 2 + b] = edge(nbr, none, o, 2 + a, 4 + b);
+    }
+  }
+  let outer = 0;
+  let lowerCorner = -1;
+  for (let c = 0; c < 8; ++c) {
+    const x = (c >> 2) & 1;
+    const y = (c >> 1) & 1;
+    const z = c & 1;
+    const exy = edges[x * 2 + y];
+    const exz = edges[4 + x * 2 + z];
+    const eyz = edges[8 + y * 2 + z];
+    const c1 = nbr[6 * (exy < 0 ? none : exy) + 4 + z];
+    const c2 = nbr[6 * (exz < 0 ? none : exz) + 2 + y];
+    const c3 = nbr[6 * (eyz < 0 ? none : eyz) + x];
+    const near = (exy >= 0) + (exz >= 0) + (eyz >= 0) + ((c1 & c2 & c3) >= 0);
+    if (near >= 2) outer |= 1 << c;
+    if (c === 0) lowerCorner = c1 >= 0 ? c1 : c2 >= 0 ? c2 : c3;
+  }
+  const mask = lv.mask;
+  const m = (at) => mask[at < 0 ? none : at];
+  const diagonal = DIAGONAL_FROM[4 * 256 + m(nbr[o])] | DIAGONAL_FROM[2 * 256 + m(nbr[o + 2])] |
+    DIAGONAL_FROM[256 + m(nbr[o + 4])] | DIAGONAL_FROM[6 * 256 + m(edges[0])] |
+    DIAGONAL_FROM[5 * 256 + m(edges[4])] | DIAGONAL_FROM[3 * 256 + m(edges[8])] | DIAGONAL_FROM[7 * 256 + m(lowerCorner)];
+  return outer | (diagonal << 8);
+}
+
+function edge(nbr, none, o, d1, d2) {
+  const a = nbr[o + d1];
+  const b = nbr[o + d2];
+  const e = nbr[6 * (a < 0 ? none : a) + d2];
+  return e >= 0 ? e : nbr[6 * (b < 0 ? none : b) + d1];
+}
+
+// The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied. `v2`: version
+// 2's contexts; `edges`: scratch.
+function decodeMask(rc, young, age, base, lv, i, v2, edges) {
   const o = 6 * i;
   let exists = 0;
   let facing = 0;
@@ -69,16 +131,20 @@ function decodeMask(rc, young, age, base, lv, i) {
     if (lv.nbr[o + 2 * axis + 1] >= 0) exists |= 8 << axis;
   }
   const sides = exists * 8;
+  const around = v2 ? surroundings(lv, i, edges) : 0;
+  const most = v2 ? 1 : 3;
   let m = 0;
   let ones = 0;
   for (let c = 0; c < 8; ++c) {
     let bit = 1;
     if (c < 7 || m !== 0) {
-      const lower = ((facing >>> (4 * c)) & 7) | SIBLINGS[c * 256 + m];
-      bit = rc.youngBit(young, age, base + (ones * 8 + lower) * 27 + SIDES[sides + c]);
+      const near = ((facing >>> (4 * c)) & 7) | SIBLINGS[c * 256 + m];
+      let extra = 0;
+      if (v2) extra = ((around >> c) & 1) * 2 + (((around >> (8 + c)) & 1) | ((m & DIAGONAL_SELF[c]) !== 0));
+      bit = rc.youngBit(young, age, base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra);
     }
     m |= bit << c;
-    if (ones < 3) ones += bit;
+    if (ones < most) ones += bit;
   }
   return m;
 }
@@ -167,8 +233,10 @@ function mergeBricks(slotLo, slotHi, bricks) {
   return { ids, brickLo, brickHi };
 }
 
-export function decodeSpatial(rc, depth, counts) {
+export function decodeSpatial(rc, depth, counts, version) {
   const levels = depth - 2;
+  const v2 = version >= 2;
+  const edges = new Int32Array(12);
   const young = newModels(CLASSES * MASK_CONTEXTS);
   const age = new Uint8Array(CLASSES * MASK_CONTEXTS);
   const p = newModels(REF_BASE + CLASSES * GAMMA_MODELS);
@@ -199,7 +267,7 @@ export function decodeSpatial(rc, depth, counts) {
         cur.mask[i] = internal ? levelMasks[id] : level > levels ? cellByte(slotLo, slotHi, id) : cellMask(slotLo[id], slotHi[id]);
         continue;
       }
-      const mask = decodeMask(rc, young, age, maskBase, cur, i);
+      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges);
       cur.mask[i] = mask;
       if (level > levels) {
         const s = id >>> 3;
