@@ -32,9 +32,6 @@ TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_
   TilingOptions tiling;
   tiling.tile_depth = tile_depth;
   tiling.colors = {ColorCodec::kVariableRate, quality_db.value_or(38.0)};
-  // At most three encodes per tile instead of nine: every tile still meets the target, within
-  // ~0.1 dB of it on lion's tiles (docs/benchmarks.md, round two).
-  tiling.colors.search_steps = 2;
   return tiling;
 }
 
