@@ -28,6 +28,8 @@ constexpr int kRounds = 6;             // correction rounds before the exact fal
 constexpr uint32_t kUnitsWanted = 32, kSmallestUnit = 1024;  // correction units
 constexpr double kLn10 = 2.302585092994046;
 constexpr double kExactDb = 100.0;     // stands in for the infinite PSNR of exact colors
+// Thresholds from 1e-3 (exact in practice) to 3e5 (above any 8-bit MSE: one block per macro block).
+const double kMinLogT = std::log(1e-3), kMaxLogT = std::log(3e5);
 
 // A run of colors encoded on its own: a macro block, or a sample run.
 struct Unit {
@@ -128,7 +130,7 @@ StatusOr<Prediction> Predict(std::span<const Rgb8> colors, BlockLayout layout, c
     }
     if (std::abs(psnr - target - kAim) < kSampleClose) break;
     last = {out.log_t, psnr};
-    out.log_t = std::clamp(out.log_t + (target + kAim - psnr) / slope, std::log(1e-3), std::log(3e5));
+    out.log_t = std::clamp(out.log_t + (target + kAim - psnr) / slope, kMinLogT, kMaxLogT);
   }
   return out;
 }
@@ -136,16 +138,20 @@ StatusOr<Prediction> Predict(std::span<const Rgb8> colors, BlockLayout layout, c
 }  // namespace
 
 StatusOr<TargetBlocks> BlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> judged, BlockLayout layout,
-                                       double target) {
+                                       double target, std::optional<double> hint) {
   const Judge judge(colors, judged);
   TargetBlocks out;
-  ASSIGN_OR_RETURN(const Prediction prediction, Predict(colors, layout, judge, target, out.encodes));
-  out.max_mse = std::exp(prediction.log_t);
+  Prediction prediction{0};
+  if (hint && *hint > 0 && std::isfinite(*hint)) {
+    prediction.log_t = std::clamp(std::log(*hint), kMinLogT, kMaxLogT);
+  } else {
+    ASSIGN_OR_RETURN(prediction, Predict(colors, layout, judge, target, out.encodes));
+  }
 
   // One encode of the whole array, cut into units at the first block start past every multiple of
   // the unit size (a power of two up to a macro block, so that every macro block starts a unit):
   // each unit can then be encoded again on its own.
-  ASSIGN_OR_RETURN(const std::vector<ColorBlock> all, EncodeBlocks(colors, layout, out.max_mse));
+  ASSIGN_OR_RETURN(const std::vector<ColorBlock> all, EncodeBlocks(colors, layout, std::exp(prediction.log_t)));
   out.encodes += 1;
   const uint32_t unit_size = std::clamp<uint32_t>(std::bit_floor(static_cast<uint32_t>(colors.size() / kUnitsWanted)),
                                                   kSmallestUnit, kMacroBlockColors);
@@ -215,8 +221,12 @@ StatusOr<TargetBlocks> BlocksForTarget(std::span<const Rgb8> colors, std::span<c
     RETURN_IF_ERROR(EncodeUnit(colors, layout, judge, units[m]));
     out.encodes += static_cast<double>(units[m].count) / static_cast<double>(colors.size());
   }
-  out.blocks.clear();
-  for (const Unit& u : units) out.blocks.insert(out.blocks.end(), u.blocks.begin(), u.blocks.end());
+  double log_sum = 0, counted = 0;
+  for (const Unit& u : units) {
+    out.blocks.insert(out.blocks.end(), u.blocks.begin(), u.blocks.end());
+    if (std::isfinite(u.log_t)) log_sum += u.log_t * u.count, counted += u.count;
+  }
+  out.max_mse = counted > 0 ? std::exp(log_sum / counted) : 0;
   return out;
 }
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -21,13 +22,14 @@ namespace pointdag {
 
 struct TargetBlocks {
   std::vector<ColorBlock> blocks;  // sorted, covering every color, never across macro blocks
-  double max_mse = 0;              // the threshold of the whole-array encode (macro blocks may differ)
+  double max_mse = 0;              // the units' thresholds' geometric mean, by colors (exact units left out)
   double encodes = 0;              // colors encoded, in units of the whole array (the cost)
 };
 
 // `judged`: the indices the PSNR-Y is measured on (each below colors.size()); empty: all colors.
-// `target`: dB, finite and positive. Errors only from EncodeBlocks (the device path).
+// `target`: dB, finite and positive. `hint`: a threshold to start from instead of the sample's
+// prediction (positive and finite, else ignored). Errors only from EncodeBlocks (the device path).
 StatusOr<TargetBlocks> BlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> judged, BlockLayout layout,
-                                       double target);
+                                       double target, std::optional<double> hint = std::nullopt);
 
 }  // namespace pointdag

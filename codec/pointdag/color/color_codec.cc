@@ -50,8 +50,8 @@ StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<c
 // About one encode (block_target.h); the decoded colors are measured again, and should rounding
 // put them a hair under the target, the exact encode (threshold 0) is stored instead.
 StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
-                                              double target) {
-  ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target));
+                                              double target, std::optional<double> hint) {
+  ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target, hint));
   ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, judged, codec, found.blocks, found.max_mse));
   out.encodes = found.encodes;
   if (out.psnr.y >= target) return out;
@@ -182,7 +182,7 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
 
   const double target = *options.target_psnr_y;
   if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
-  return EncodeBlocksForTarget(colors, judged, options.codec, target);
+  return EncodeBlocksForTarget(colors, judged, options.codec, target, options.threshold_hint);
 }
 
 }  // namespace pointdag

@@ -33,6 +33,9 @@ struct ColorEncodeOptions {
   Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
   int image_quality = 90;               // jpeg/webp when no target is given
   int astc_footprint = 6;               // astc when no target is given
+  // Block codecs at a target: a threshold expected near the answer (a sibling tile's), which the
+  // encode starts from instead of predicting one on a sample. The target is met either way.
+  std::optional<double> threshold_hint = std::nullopt;
 };
 
 bool IsLossy(ColorCodec codec);
@@ -40,7 +43,7 @@ bool IsLossy(ColorCodec codec);
 struct EncodedColors {
   std::vector<uint8_t> bytes;  // the colors section
   ColorCodec codec = ColorCodec::kRaw;
-  double max_mse = 0;          // the threshold used (block codecs)
+  double max_mse = 0;          // the threshold used (block codecs; at a target, a typical one)
   ColorPsnr psnr;              // of the decoded colors against the input
   size_t blocks = 0;
   double encodes = 0;          // block codecs at a target: colors encoded, in whole arrays
