@@ -31,7 +31,7 @@ constexpr double kExactDb = 100.0;     // stands in for the infinite PSNR of exa
 // Thresholds from 1e-3 (exact in practice) to 3e5 (above any 8-bit MSE: one block per macro block).
 const double kMinLogT = std::log(1e-3), kMaxLogT = std::log(3e5);
 
-// A run of colors encoded on its own: a macro block, or a sample run.
+// A run of colors encoded on its own: a correction unit (whole blocks inside one macro block), or a sample run.
 struct Unit {
   uint32_t begin = 0, count = 0;
   double log_t = 0;  // ln of its threshold
