@@ -130,6 +130,7 @@ int RunEncode(const std::string& input, const std::string& output, const GridCho
   if (encoded->grid.has_color()) {
     std::fprintf(stderr, ", colors (%s) %.3f bits/voxel at PSNR-Y %.2f dB", ColorCodecName(encoded->colors.codec),
                  8.0 * static_cast<double>(encoded->file.colors.size()) / voxels, encoded->colors.psnr.y);
+    if (encoded->colors.encodes > 0) std::fprintf(stderr, " (%.2f encodes)", encoded->colors.encodes);
   }
   std::fprintf(stderr, "\n");
   return 0;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <future>
 
 #include "pointdag/compare/point_metrics.h"
 
@@ -28,9 +29,6 @@ TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_
   TilingOptions tiling;
   tiling.tile_depth = tile_depth;
   tiling.colors = {ColorCodec::kVariableRate, quality_db.value_or(38.0)};
-  // At most three encodes per tile instead of nine: every tile still meets the target, within
-  // ~0.1 dB of it on lion's tiles (docs/benchmarks.md, round two).
-  tiling.colors.search_steps = 2;
   return tiling;
 }
 
@@ -62,14 +60,22 @@ StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const Inges
   out.voxelize_seconds = since(start);
   auto stage_start = std::chrono::steady_clock::now();
 
+  // Draco is one thread: it runs beside the tiles (which fill the cores but idle at their end)
+  // rather than after them.
+  auto draco = std::async(std::launch::async, [&] {
+    const auto draco_start = std::chrono::steady_clock::now();
+    auto result = DracoEncodeVoxels(out.grid, DracoSearch::kBestLevel);
+    out.compare_seconds = since(draco_start);
+    return result;
+  });
   TilingOptions tiling = IngestTilingOptions(options.tile_depth, options.quality_db);
   tiling.progress = [&](uint64_t done, uint64_t total) { report("tile", double(done) / double(total)); };
-  ASSIGN_OR_RETURN(out.tiles, BuildTiles(out.grid, out.scan, path.filename().string(), tiling));
+  auto tiles = BuildTiles(out.grid, out.scan, path.filename().string(), tiling);
   out.tile_seconds = since(stage_start);
   report("compare", 0);
-  stage_start = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(out.draco, DracoEncodeVoxels(out.grid, DracoSearch::kBestLevel));
-  out.compare_seconds = since(stage_start);
+  auto compared = draco.get();
+  ASSIGN_OR_RETURN(out.tiles, std::move(tiles));
+  ASSIGN_OR_RETURN(out.draco, std::move(compared));
   report("compare", 1);
   out.seconds = since(start);
   return out;

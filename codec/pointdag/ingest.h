@@ -1,6 +1,7 @@
 // The daemon's pipeline, one call per uploaded scan:
 //
-//   read -> georeference (ENU metres when the scan has a CRS) -> voxelize -> LOD tiles -> Draco
+//   read -> georeference (ENU metres when the scan has a CRS) -> voxelize -> LOD tiles, and beside
+//   them (one thread) Draco on the finest voxels
 //
 // Contract: the finest level is exactly what `pointdag encode --georeference` voxelizes from the
 // same file at the same voxel size (same frame, same origin, same codes). Without a voxel size the
@@ -40,7 +41,8 @@ struct IngestedScan {
   TileSet tiles;
   DracoResult draco;
   double seconds = 0;  // the whole call
-  double voxelize_seconds = 0, tile_seconds = 0, compare_seconds = 0;
+  double voxelize_seconds = 0, tile_seconds = 0, compare_seconds = 0;  // Draco's overlaps the tiles'
+
 };
 
 StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const IngestOptions& options);

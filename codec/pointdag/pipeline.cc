@@ -40,8 +40,7 @@ Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
       // only those, so one search meets it (a search over every node's colors landed under it on
       // the voxels and had to be repeated with a higher target).
       const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
-      const std::vector<uint64_t> voxel_nodes = MipVoxelIndices(out.grid.morton, out.grid.depth);
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors, {}, voxel_nodes));
+      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors, {}, mip.voxel_index));
     } else {
       ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors, out.grid.morton));
     }

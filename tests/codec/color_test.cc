@@ -5,6 +5,7 @@
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/block_target.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/image_mapping.h"
 #include "pointdag/pipeline.h"
@@ -143,6 +144,32 @@ TEST(ColorCodec, TargetOnColorsCodedExactlyEndsOnAFiniteThreshold) {
       EXPECT_TRUE(std::isfinite(encoded->max_mse)) << encoded->max_mse;
       EXPECT_GE(encoded->psnr.y, 38.0);
       EXPECT_EQ(*DecodeColors(encoded->bytes, colors.size()), colors);
+    }
+  }
+}
+
+// The threshold is predicted on a sample and corrected on units of the one whole encode: the
+// blocks tile the colors (never across macro blocks, which the decoder checks), the decoded colors
+// meet every target over the judged colors, and it costs well under the search's 2-6 encodes.
+TEST(ColorCodec, TargetCostsAboutOneEncodeAndIsMetOnTheJudgedColors) {
+  const auto colors = SyntheticColors(5 * kMacroBlockColors + 777, 11);
+  std::vector<uint64_t> judged;
+  for (uint64_t i = 0; i < colors.size(); i += 3) judged.push_back(i);
+  for (double target : {30.0, 36.0, 44.0}) {
+    for (std::span<const uint64_t> which : {std::span<const uint64_t>(), std::span<const uint64_t>(judged)}) {
+      auto found = BlocksForTarget(colors, which, BlockLayout::kVariableRate, target);
+      ASSERT_TRUE(found.ok()) << found.status().ToString();
+      EXPECT_LT(found->encodes, 2.5) << target;
+      auto decoder = BlockColorDecoder::Open(*SerializeBlocks(colors, found->blocks, BlockLayout::kVariableRate), colors.size());
+      ASSERT_TRUE(decoder.ok()) << decoder.status().ToString();
+      const std::vector<Rgb8> decoded = decoder->DecodeAll();
+      std::vector<Rgb8> a, b;
+      for (uint64_t i = 0; i < colors.size(); ++i) {
+        if (which.empty() || i % 3 == 0) a.push_back(colors[i]), b.push_back(decoded[i]);
+      }
+      const double psnr = MeasureColorPsnr(a, b).y;
+      EXPECT_GE(psnr, target);
+      EXPECT_LT(psnr, target + 0.5);  // close to it, not exact colors
     }
   }
 }

@@ -6,6 +6,7 @@
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/block_target.h"
 #include "pointdag/color/lossless_context.h"
 
 namespace pointdag {
@@ -21,11 +22,14 @@ ColorPsnr Measure(std::span<const Rgb8> colors, std::span<const Rgb8> decoded, s
   return MeasureColorPsnr(a, b);
 }
 
-StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
-                                       double max_mse) {
-  const BlockLayout layout = codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
-  ASSIGN_OR_RETURN(const std::vector<ColorBlock> blocks, EncodeBlocks(colors, layout, max_mse));
-  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, layout));
+BlockLayout LayoutOf(ColorCodec codec) {
+  return codec == ColorCodec::kFixedRate ? BlockLayout::kFixedRate : BlockLayout::kVariableRate;
+}
+
+// The stored section of `blocks`, measured by decoding it.
+StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+                                          std::span<const ColorBlock> blocks, double max_mse) {
+  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec)));
   ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream, colors.size()));
   EncodedColors out;
   out.codec = codec;
@@ -34,6 +38,25 @@ StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<c
   out.psnr = Measure(colors, decoder.DecodeAll(), judged);
   out.bytes.push_back(static_cast<uint8_t>(codec));
   out.bytes.insert(out.bytes.end(), stream.begin(), stream.end());
+  return out;
+}
+
+StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+                                       double max_mse) {
+  ASSIGN_OR_RETURN(const std::vector<ColorBlock> blocks, EncodeBlocks(colors, LayoutOf(codec), max_mse));
+  return SerializeMeasured(colors, judged, codec, blocks, max_mse);
+}
+
+// About one encode (block_target.h); the decoded colors are measured again, and should rounding
+// put them a hair under the target, the exact encode (threshold 0) is stored instead.
+StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+                                              double target, std::optional<double> hint) {
+  ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target, hint));
+  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, judged, codec, found.blocks, found.max_mse));
+  out.encodes = found.encodes;
+  if (out.psnr.y >= target) return out;
+  ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, judged, codec, 0));
+  out.encodes = found.encodes + 1;
   return out;
 }
 
@@ -93,63 +116,6 @@ StatusOr<EncodedColors> SearchAstcFootprint(std::span<const Rgb8> colors, std::s
     if (trial.psnr.y >= *options.target_psnr_y) return trial;
   }
   return InvalidArgument("astc cannot reach " + std::to_string(*options.target_psnr_y) + " dB PSNR-Y on these colors");
-}
-
-// The block codecs' threshold for a PSNR-Y target: the largest threshold that meets it, found with
-// few full encodes (the bisection before this took 9-10 and four fifths of an encode's time).
-// Decoded PSNR-Y falls about 10 dB per decade of threshold (the blocks' MSE follows it), so the
-// first guess is 1.5 times the MSE the target allows (about where lion, guanyin and autzen meet
-// it); the next ones extrapolate along the last two encodes' slope or, once both sides are known,
-// follow a secant through the nearest passing and failing encodes, aiming a hair above the target
-// and kept inside the bracket so that a bent curve cannot stall it. It stops once a passing encode
-// is within kClose of the target, the bracket is within 1% of threshold, or after `steps` more
-// encodes; the cheapest passing encode wins. A threshold of 0 keeps every color exact (blocks of
-// identical colors only) and is the fallback when nothing else passes.
-StatusOr<EncodedColors> SearchBlockThreshold(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
-                                             double target, int steps) {
-  constexpr double kClose = 0.02, kAim = 0.01, kLn10 = 2.302585092994046;
-  constexpr double kDefaultSlope = -10.0 / kLn10;  // dB per unit of ln(threshold)
-  constexpr double kExactDb = 100.0;
-  // Thresholds from 1e-3 (exact in practice) to 3e5 (above any 8-bit MSE: one block).
-  const double kMinLogT = std::log(1e-3), kMaxLogT = std::log(3e5);
-  const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
-  struct Point {
-    double log_t, psnr;
-  };
-  std::optional<Point> pass, fail;  // the highest passing and the lowest failing threshold so far
-  std::optional<Point> last;         // the previous encode, for the slope while one side is unknown
-  std::optional<EncodedColors> best;
-  double log_t = std::log(allowed * 1.5);
-  for (int step = 0; step <= steps; ++step) {
-    ASSIGN_OR_RETURN(EncodedColors trial, EncodeBlocksAt(colors, judged, codec, std::exp(log_t)));  // measured by decoding
-    // Exact colors measure an infinite PSNR: a finite stand-in keeps the slopes numbers.
-    const Point point{log_t, std::min(trial.psnr.y, kExactDb)};
-    if (trial.psnr.y >= target) {
-      if (!pass || point.log_t > pass->log_t) pass = point;
-      if (!best || trial.bytes.size() <= best->bytes.size()) best = std::move(trial);
-      if (point.psnr - target < kClose) break;
-    } else if (!fail || point.log_t < fail->log_t) {
-      fail = point;
-    }
-    if (pass && fail && fail->log_t - pass->log_t < 0.01) break;
-    if (pass && fail) {
-      const double slope = (fail->psnr - pass->psnr) / (fail->log_t - pass->log_t);
-      const double width = fail->log_t - pass->log_t;
-      const double guess = slope < 0 ? pass->log_t + (target + kAim - pass->psnr) / slope : pass->log_t + width / 2;
-      log_t = std::clamp(guess, pass->log_t + 0.1 * width, fail->log_t - 0.1 * width);
-    } else {
-      const Point& from = pass ? *pass : *fail;  // extrapolate from the one side known
-      double slope = kDefaultSlope;
-      if (last && last->log_t != point.log_t) {
-        slope = std::clamp((point.psnr - last->psnr) / (point.log_t - last->log_t), 3 * kDefaultSlope, kDefaultSlope / 3);
-      }
-      log_t = from.log_t + (target + kAim - from.psnr) / slope;
-    }
-    log_t = std::clamp(log_t, kMinLogT, kMaxLogT);  // a flat curve would send it to infinity
-    last = point;
-  }
-  if (best) return *std::move(best);
-  return EncodeBlocksAt(colors, judged, codec, 0);
 }
 
 }  // namespace
@@ -216,7 +182,7 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
 
   const double target = *options.target_psnr_y;
   if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
-  return SearchBlockThreshold(colors, judged, options.codec, target, options.search_steps);
+  return EncodeBlocksForTarget(colors, judged, options.codec, target, options.threshold_hint);
 }
 
 }  // namespace pointdag

@@ -4,8 +4,8 @@
 // residuals: lossless_context.h; version 1, planar differences in zstd, is still read), the
 // block codecs "fixed3" (Paper IIA) and "vbr" (Paper IIB), and the 2D mapping of Paper IIA through
 // image codecs: "png" (lossless), "jpeg", "webp", and the GPU texture format "astc". A target
-// PSNR-Y makes the encoder search the block codecs' MSE threshold (a secant search on its logarithm,
-// 2-6 encodes), the image codecs' quality (bisection on 1..100) or ASTC's footprint (cheapest first), keeping the
+// PSNR-Y makes the encoder predict the block codecs' MSE threshold on a sample, encode once and
+// correct macro blocks locally (block_target.h), search the image codecs' quality (bisection on 1..100) or ASTC's footprint (cheapest first), keeping the
 // cheapest setting whose decoded colors still meet the target: the target
 // is met by measurement, not prediction. The stored section starts with the codec's id byte
 // (proto/PDAG_FORMAT.md §3).
@@ -33,7 +33,9 @@ struct ColorEncodeOptions {
   Curve curve = Curve::kHilbert;        // image codecs: the 2D mapping
   int image_quality = 90;               // jpeg/webp when no target is given
   int astc_footprint = 6;               // astc when no target is given
-  int search_steps = 8;                 // block codecs: most encodes after the first guess
+  // Block codecs at a target: a threshold expected near the answer (a sibling tile's), which the
+  // encode starts from instead of predicting one on a sample. The target is met either way.
+  std::optional<double> threshold_hint = std::nullopt;
 };
 
 bool IsLossy(ColorCodec codec);
@@ -41,9 +43,10 @@ bool IsLossy(ColorCodec codec);
 struct EncodedColors {
   std::vector<uint8_t> bytes;  // the colors section
   ColorCodec codec = ColorCodec::kRaw;
-  double max_mse = 0;          // the threshold used (block codecs)
+  double max_mse = 0;          // the threshold used (block codecs; at a target, a typical one)
   ColorPsnr psnr;              // of the decoded colors against the input
   size_t blocks = 0;
+  double encodes = 0;          // block codecs at a target: colors encoded, in whole arrays
 };
 
 // `morton`: the voxels' Morton codes when `colors` are one per voxel in Morton order (leaf mode),

@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <optional>
 
 #include "pointdag/voxelize/morton.h"
 
@@ -84,7 +85,23 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
   set.tiles.resize(pending.size());
   std::vector<Status> failures(pending.size());
   std::atomic<uint64_t> done{0};
-  tbb::parallel_for(size_t{0}, pending.size(), [&](size_t t) {
+  // The largest tile of each level goes first; the threshold its colors' target settled on is where
+  // the level's other tiles start (the same scan at the same scale: no sample to predict one).
+  std::vector<size_t> leads, rest;
+  for (size_t t = 0; t < pending.size(); ++t) {
+    const bool new_level = leads.empty() || pending[leads.back()].key.level != pending[t].key.level;
+    const auto size = [&](size_t k) { return pending[k].end - pending[k].first; };
+    if (new_level) {
+      leads.push_back(t);
+    } else if (size(t) > size(leads.back())) {
+      rest.push_back(leads.back());
+      leads.back() = t;
+    } else {
+      rest.push_back(t);
+    }
+  }
+  std::vector<std::optional<double>> level_hint(static_cast<size_t>(set.levels)), encoded_hint(pending.size());
+  const auto encode_tile = [&](size_t t) {
     const Pending& p = pending[t];
     VoxelGrid grid;
     grid.depth = set.tile_depth;
@@ -96,16 +113,22 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
     grid.morton.reserve(p.end - p.first);
     for (size_t i = p.first; i < p.end; ++i) grid.morton.push_back(p.level->morton[i] & local_mask);
     if (p.level->has_color()) grid.colors.assign(p.level->colors.begin() + static_cast<long>(p.first), p.level->colors.begin() + static_cast<long>(p.end));
-    auto encoded = EncodeGrid(std::move(grid), scan, source_name, encode);
+    EncodeOptions tile_options = encode;
+    tile_options.colors.threshold_hint = level_hint[static_cast<size_t>(p.key.level)];
+    auto encoded = EncodeGrid(std::move(grid), scan, source_name, tile_options);
     if (!encoded.ok()) {
       failures[t] = encoded.status();
       return;
     }
+    if (encoded->colors.max_mse > 0) encoded_hint[t] = encoded->colors.max_mse;
     encoded->file.meta["tile"] = {{"level", p.key.level}, {"x", p.key.x}, {"y", p.key.y}, {"z", p.key.z}};
     set.tiles[t] = {p.key, p.end - p.first, SerializePdag(encoded->file)};
     const uint64_t finished = ++done;
     if (options.progress) options.progress(finished, pending.size());
-  });
+  };
+  tbb::parallel_for(size_t{0}, leads.size(), [&](size_t k) { encode_tile(leads[k]); });
+  for (size_t t : leads) level_hint[static_cast<size_t>(pending[t].key.level)] = encoded_hint[t];
+  tbb::parallel_for(size_t{0}, rest.size(), [&](size_t k) { encode_tile(rest[k]); });
   for (const Status& s : failures) RETURN_IF_ERROR(s);
   return set;
 }
