@@ -56,7 +56,7 @@ uint Pack(uint r, uint g, uint b) { return r | (g << 8) | (b << 16); }
 
 uint64_t MaxSse(uint length) {
   const uint64_t scaled = uint64_t(params.threshold_lo) | (uint64_t(params.threshold_hi) << 32);
-  return uint64_t(length) * scaled / 1024ul;
+  return uint64_t(length) * scaled;
 }
 
 uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 4u; }
@@ -74,10 +74,15 @@ uint WeightOf(ivec3 c, ivec3 a, ivec3 d, int len2, int m) {
   return uint((2 * m * dot_ + len2) / (2 * len2));
 }
 
+// kErrorWeights and BlockError (block_fit.h): the luma-weighted error in 1/1024ths, by rows.
+const ivec3 kQ0 = ivec3(274, 373, 6), kQ1 = ivec3(373, 1753, 71), kQ2 = ivec3(6, 71, 145);
+
 uint ErrorOf(ivec3 c, ivec3 a, ivec3 b, uint w, uint m) {
   const uvec3 r = (uvec3(a) * (m - w) + uvec3(b) * w + m / 2u) / m;
   const ivec3 e = c - ivec3(r);
-  return uint(e.x * e.x + e.y * e.y + e.z * e.z);
+  const ivec3 q = ivec3(kQ0.x * e.x + kQ0.y * e.y + kQ0.z * e.z, kQ1.x * e.x + kQ1.y * e.y + kQ1.z * e.z,
+                        kQ2.x * e.x + kQ2.y * e.y + kQ2.z * e.z);
+  return uint(e.x * q.x + e.y * q.y + e.z * q.z);
 }
 
 struct Fit {
@@ -107,9 +112,14 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   const int64_t widest_var = widest == 0 ? c0.x : (widest == 1 ? c1.y : c2.z);
   if (bits == 0 || widest_var == 0) {
     const i64vec3 a = i64vec3(RoundDiv(s.x, n), RoundDiv(s.y, n), RoundDiv(s.z, n));
+    // sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k): squares, then products rg rb gb (twice each).
     const i64vec3 e = sq - 2 * a * s + n * a * a;
+    const i64vec3 p = pr - i64vec3(a.x * s.y + a.y * s.x, a.x * s.z + a.z * s.x, a.y * s.z + a.z * s.y) +
+                      n * i64vec3(a.x * a.y, a.x * a.z, a.y * a.z);
+    const int64_t sse = int64_t(kQ0.x) * e.x + int64_t(kQ1.y) * e.y + int64_t(kQ2.z) * e.z +
+                        2 * (int64_t(kQ0.y) * p.x + int64_t(kQ0.z) * p.y + int64_t(kQ1.z) * p.z);
     const uint c = Pack(Clamp255(a.x), Clamp255(a.y), Clamp255(a.z));
-    return Fit(c, c, uint64_t(e.x) + uint64_t(e.y) + uint64_t(e.z));
+    return Fit(c, c, uint64_t(sse));
   }
   i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
   Shrink(axis);

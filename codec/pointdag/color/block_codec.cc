@@ -25,12 +25,13 @@ struct Candidate {
   uint32_t failed_with = 0;  // length of the right neighbour a merge with failed (it would fail again)
 };
 
-// A block passes when its MSE per channel, sse / (3 length), is within the threshold. In integers
-// (so that the Vulkan port decides alike): 1024 sse <= length * scaled, scaled = floor(3072 max_mse).
+// A block passes when its mean error per channel, sse / (3 length) with sse the BlockError sum in
+// 1/1024ths, is within the threshold. In integers (so that the Vulkan port decides alike):
+// sse <= length * scaled, scaled = floor(3072 max_mse).
 struct Threshold {
   uint64_t scaled;
   explicit Threshold(double max_mse) : scaled(static_cast<uint64_t>(std::clamp(max_mse * 3072.0, 0.0, 1073741824.0))) {}
-  uint64_t MaxSse(uint32_t length) const { return length * scaled / 1024; }
+  uint64_t MaxSse(uint32_t length) const { return length * scaled; }
 };
 
 // Paper IIA's merge passes, from the given blocks, at `bits` per weight: each pass walks the blocks

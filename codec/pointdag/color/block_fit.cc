@@ -74,7 +74,7 @@ BlockFit FitWeights(const Rgb8* colors, uint32_t length, const Endpoints& ends, 
   int64_t s00 = 0, s01 = 0, s11 = 0, r0[3] = {0, 0, 0}, r1[3] = {0, 0, 0};
   for (uint32_t i = 0; i < length; ++i) {
     const uint32_t w = first.Weight(colors[i]);
-    best.sse += SquaredError(colors[i], first.Color(w));
+    best.sse += BlockError(colors[i], first.Color(w));
     const int64_t u = m - w, t = w;
     s00 += u * u, s01 += u * t, s11 += t * t;
     for (int k = 0; k < 3; ++k) r0[k] += u * Channel(colors[i], k), r1[k] += t * Channel(colors[i], k);
@@ -91,12 +91,16 @@ BlockFit FitWeights(const Rgb8* colors, uint32_t length, const Endpoints& ends, 
   const Rebuilder<kBits> second(refined);
   const uint64_t stop = std::min(best.sse, give_up_above);
   uint64_t sse = 0;
-  for (uint32_t i = 0; i < length && sse <= stop; ++i) sse += SquaredError(colors[i], second.Color(second.Weight(colors[i])));
+  for (uint32_t i = 0; i < length && sse <= stop; ++i) sse += BlockError(colors[i], second.Color(second.Weight(colors[i])));
   if (sse < best.sse) best = {refined, sse};
   return best;
 }
 
-// Whether no fit with any bits can reach `give_up_above`, known from the covariance alone. Every
+// Below the smallest eigenvalue of kErrorWeights (139.4): BlockError >= this x the RGB squared error.
+constexpr double kErrorFloor = 136.0;
+
+// Whether no fit with any bits can reach `give_up_above` (a BlockError sum, so at least kErrorFloor
+// times the RGB squared error bounded here), known from the covariance alone. Every
 // rebuilt color lies within sqrt(3)/2 of the segment A-B (Interpolate rounds each channel to within
 // 1/2), so with D the colors' squared distance to that line, sse >= D - sqrt(3 n D) once D >= 3n/4; and D is at
 // least the scatter off the principal axis, lambda2 + lambda3 = s, which the characteristic
@@ -111,7 +115,7 @@ bool CannotReach(const int64_t cov[3][3], int64_t n, uint64_t give_up_above) {
   const double s = 2.0 / 3.0 * (e1 - std::sqrt(std::max(0.0, e1 * e1 - 3 * e2))) - 1e-6 * e1;  // margin for rounding
   const double scatter = s / double(n);  // cov is n times the scatter matrix
   if (scatter < 0.75 * double(n)) return false;
-  return scatter - std::sqrt(3.0 * double(n) * scatter) > double(give_up_above);
+  return kErrorFloor * (scatter - std::sqrt(3.0 * double(n) * scatter)) > double(give_up_above);
 }
 
 }  // namespace
@@ -142,16 +146,18 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
   }
   const int widest = cov[0][0] >= cov[1][1] ? (cov[0][0] >= cov[2][2] ? 0 : 2) : (cov[1][1] >= cov[2][2] ? 1 : 2);
   if (bits == 0 || cov[widest][widest] == 0) {
-    // One color for the whole block: the mean, whose error follows from the sums alone.
-    uint8_t mean[3];
-    uint64_t sse = 0;
-    for (int k = 0; k < 3; ++k) {
-      const int64_t a = RoundDiv(sums.s[k], n);
-      mean[k] = Clamp255(a);
-      sse += static_cast<uint64_t>(sums.ss[k] - 2 * a * sums.s[k] + n * a * a);
+    // One color for the whole block: the mean, whose error follows from the sums alone:
+    // sum over colors of (c - a)^T Q (c - a) = sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k).
+    int64_t a[3];
+    for (int k = 0; k < 3; ++k) a[k] = RoundDiv(sums.s[k], n);
+    int64_t sse = 0;
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        sse += kErrorWeights[j][k] * (sums.ss[kPair[j][k]] - a[j] * sums.s[k] - a[k] * sums.s[j] + n * a[j] * a[k]);
+      }
     }
-    const Rgb8 c{mean[0], mean[1], mean[2]};
-    return {{c, c}, sse};
+    const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
+    return {{c, c}, static_cast<uint64_t>(sse)};
   }
   if (give_up_above != UINT64_MAX && CannotReach(cov, n, give_up_above)) return {{}, give_up_above + 1};
   // Principal axis by power iteration, starting from the widest channel's column.

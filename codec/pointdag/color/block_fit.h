@@ -29,7 +29,7 @@ struct Endpoints {
 
 struct BlockFit {
   Endpoints ends;
-  uint64_t sse = 0;  // squared error summed over the block's colors and their three channels
+  uint64_t sse = 0;  // BlockError summed over the block's colors
 };
 
 // Fits blocks inside one run of colors (a macro block). Prefix sums of the colors and of their
@@ -77,6 +77,19 @@ inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
 inline uint32_t SquaredError(const Rgb8& x, const Rgb8& y) {
   const int32_t dr = x.r - y.r, dg = x.g - y.g, db = x.b - y.b;
   return static_cast<uint32_t>(dr * dr + dg * dg + db * db);
+}
+
+// The error blocks are judged by, in 1/1024ths: d^T Q d for the RGB difference d, with Q = 1024 (3 y y^T
+// + w (cb cb^T + cr cr^T)) rounded, y, cb, cr the BT.709 luma and chroma rows. Quality is judged on
+// PSNR-Y, so luma counts 3/w times more than chroma (w = 1/2: MPEG's 6:1:1); a gray difference costs what
+// the RGB squared error does. Q is positive definite, so every term sum below is >= 0.
+constexpr int32_t kErrorWeights[3][3] = {{274, 373, 6}, {373, 1753, 71}, {6, 71, 145}};
+
+inline uint32_t BlockError(const Rgb8& x, const Rgb8& y) {
+  const int32_t d[3] = {x.r - y.r, x.g - y.g, x.b - y.b};
+  int32_t e = 0;
+  for (int j = 0; j < 3; ++j) e += d[j] * (kErrorWeights[j][0] * d[0] + kErrorWeights[j][1] * d[1] + kErrorWeights[j][2] * d[2]);
+  return static_cast<uint32_t>(e);
 }
 
 }  // namespace pointdag
