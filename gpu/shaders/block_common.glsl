@@ -67,15 +67,20 @@ void Shrink(inout i64vec3 v) {
   v = v >> shift;
 }
 
-uint WeightOf(ivec3 c, ivec3 a, ivec3 d, int len2, int m) {
-  const int dot_ = (c.x - a.x) * d.x + (c.y - a.y) * d.y + (c.z - a.z) * d.z;
-  if (dot_ <= 0) return 0u;
-  if (dot_ >= len2) return uint(m);
-  return uint((2 * m * dot_ + len2) / (2 * len2));
-}
-
 // kErrorWeights and BlockError (block_fit.h): the luma-weighted error in 1/1024ths, by rows.
 const ivec3 kQ0 = ivec3(274, 373, 6), kQ1 = ivec3(373, 1753, 71), kQ2 = ivec3(6, 71, 145);
+
+// ChooseWeight (block_fit.h): projection in BlockError's metric; q = Q (B - A), len2 = (B - A)^T q.
+uint WeightOf(ivec3 c, ivec3 a, ivec3 q, int len2, int m) {
+  const int dot_ = (c.x - a.x) * q.x + (c.y - a.y) * q.y + (c.z - a.z) * q.z;
+  if (dot_ <= 0) return 0u;
+  if (dot_ >= len2) return uint(m);
+  return uint((int64_t(2) * int64_t(m) * int64_t(dot_) + int64_t(len2)) / (int64_t(2) * int64_t(len2)));
+}
+
+ivec3 WeightedAxis(ivec3 d) {
+  return ivec3(kQ0.x * d.x + kQ0.y * d.y + kQ0.z * d.z, kQ1.x * d.x + kQ1.y * d.y + kQ1.z * d.z, kQ2.x * d.x + kQ2.y * d.y + kQ2.z * d.z);
+}
 
 uint ErrorOf(ivec3 c, ivec3 a, ivec3 b, uint w, uint m) {
   const uvec3 r = (uvec3(a) * (m - w) + uvec3(b) * w + m / 2u) / m;
@@ -148,13 +153,13 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
                  0ul);
 
   const int mx = (1 << bits) - 1;
-  const ivec3 a = Unpack(best.a), b = Unpack(best.b), d = b - a;
-  const int len2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  const ivec3 a = Unpack(best.a), b = Unpack(best.b), d = b - a, q = WeightedAxis(d);
+  const int len2 = d.x * q.x + d.y * q.y + d.z * q.z;
   int64_t s00 = 0, s01 = 0, s11 = 0;
   i64vec3 r0 = i64vec3(0), r1 = i64vec3(0);
   for (uint i = 0; i < length; ++i) {
     const ivec3 c = Unpack(colors[first + i]);
-    const uint w = WeightOf(c, a, d, len2, mx);
+    const uint w = WeightOf(c, a, q, len2, mx);
     best.sse += uint64_t(ErrorOf(c, a, b, w, uint(mx)));
     const int64_t u = int64_t(mx) - int64_t(w), t = int64_t(w);
     s00 += u * u;
@@ -169,13 +174,13 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   const uint refined_a = Pack(Clamp255(RoundDiv(na.x, det)), Clamp255(RoundDiv(na.y, det)), Clamp255(RoundDiv(na.z, det)));
   const uint refined_b = Pack(Clamp255(RoundDiv(nb.x, det)), Clamp255(RoundDiv(nb.y, det)), Clamp255(RoundDiv(nb.z, det)));
   if (refined_a == best.a && refined_b == best.b) return best;
-  const ivec3 a2 = Unpack(refined_a), b2 = Unpack(refined_b), d2 = b2 - a2;
-  const int len2b = d2.x * d2.x + d2.y * d2.y + d2.z * d2.z;
+  const ivec3 a2 = Unpack(refined_a), b2 = Unpack(refined_b), d2 = b2 - a2, q2 = WeightedAxis(d2);
+  const int len2b = d2.x * q2.x + d2.y * q2.y + d2.z * q2.z;
   const uint64_t stop = min(best.sse, give_up_above);
   uint64_t sse = 0;
   for (uint i = 0; i < length && sse <= stop; ++i) {
     const ivec3 c = Unpack(colors[first + i]);
-    sse += uint64_t(ErrorOf(c, a2, b2, WeightOf(c, a2, d2, len2b, mx), uint(mx)));
+    sse += uint64_t(ErrorOf(c, a2, b2, WeightOf(c, a2, q2, len2b, mx), uint(mx)));
   }
   if (sse < best.sse) best = Fit(refined_a, refined_b, sse);
   return best;

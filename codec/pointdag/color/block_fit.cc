@@ -32,33 +32,33 @@ void Shrink(int64_t v[3]) {
 
 // ChooseWeight and Interpolate for one pair of endpoints, with the divisions done by multiplying (and
 // Interpolate's by a table of the 2^bits colors):
-// by a compile-time m, and by 1 / (2 |B - A|^2) with a nudge that keeps the floor exact (the
-// numerator is below 2^26 and the denominator below 2^19, so a quotient that is not an integer is
-// at least 2^-19 from one, and the product's error is below 2^-47).
+// by a compile-time m, and by 1 / (2 (B - A)^T Q (B - A)) with a nudge that keeps the floor exact (the
+// numerator is below 2^34 and the denominator below 2^30, so a quotient that is not an integer is
+// at least 2^-30 from one, and the product's error, the quotient being below 16, is below 2^-47).
 template <int kBits>
 class Rebuilder {
  public:
   static constexpr int32_t kM = (1 << kBits) - 1;
 
-  explicit Rebuilder(const Endpoints& e) : e_(e), d_{e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b} {
-    len2_ = d_[0] * d_[0] + d_[1] * d_[1] + d_[2] * d_[2];
+  explicit Rebuilder(const Endpoints& e) : e_(e), q_(WeightedAxis(e)) {
+    len2_ = (e.b.r - e.a.r) * q_[0] + (e.b.g - e.a.g) * q_[1] + (e.b.b - e.a.b) * q_[2];
     inverse_ = len2_ ? 1.0 / (2.0 * len2_) : 0.0;
     const auto mix = [](uint32_t a, uint32_t b, uint32_t w) { return static_cast<uint8_t>((a * (kM - w) + b * w + kM / 2) / kM); };
     for (uint32_t w = 0; w <= kM; ++w) palette_[w] = {mix(e.a.r, e.b.r, w), mix(e.a.g, e.b.g, w), mix(e.a.b, e.b.b, w)};
   }
 
   uint32_t Weight(const Rgb8& c) const {
-    const int32_t dot = (c.r - e_.a.r) * d_[0] + (c.g - e_.a.g) * d_[1] + (c.b - e_.a.b) * d_[2];
+    const int32_t dot = (c.r - e_.a.r) * q_[0] + (c.g - e_.a.g) * q_[1] + (c.b - e_.a.b) * q_[2];
     if (dot <= 0) return 0;
     if (dot >= len2_) return kM;
-    return static_cast<uint32_t>(double(2 * kM * dot + len2_) * inverse_ + 0x1p-25);
+    return static_cast<uint32_t>(double(2 * int64_t{kM} * dot + len2_) * inverse_ + 0x1p-38);
   }
 
   Rgb8 Color(uint32_t w) const { return palette_[w]; }
 
  private:
   Endpoints e_;
-  int32_t d_[3];
+  std::array<int32_t, 3> q_;  // Q (B - A)
   int32_t len2_;
   double inverse_;
   std::array<Rgb8, kM + 1> palette_;  // Interpolate for every weight, computed once per endpoints

@@ -55,18 +55,6 @@ class BlockFitter {
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
 };
 
-// The weight that rebuilds `c` best from `ends` (projection onto the segment, rounded half up).
-inline uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits) {
-  if (bits == 0) return 0;
-  const int32_t m = (1 << bits) - 1;
-  const int32_t dr = ends.b.r - ends.a.r, dg = ends.b.g - ends.a.g, db = ends.b.b - ends.a.b;
-  const int32_t len2 = dr * dr + dg * dg + db * db;
-  const int32_t dot = (c.r - ends.a.r) * dr + (c.g - ends.a.g) * dg + (c.b - ends.a.b) * db;
-  if (dot <= 0) return 0;
-  if (dot >= len2) return static_cast<uint32_t>(m);
-  return static_cast<uint32_t>((2 * m * dot + len2) / (2 * len2));
-}
-
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
   if (bits == 0) return e.a;
   const uint32_t m = (1u << bits) - 1;
@@ -90,6 +78,27 @@ inline uint32_t BlockError(const Rgb8& x, const Rgb8& y) {
   int32_t e = 0;
   for (int j = 0; j < 3; ++j) e += d[j] * (kErrorWeights[j][0] * d[0] + kErrorWeights[j][1] * d[1] + kErrorWeights[j][2] * d[2]);
   return static_cast<uint32_t>(e);
+}
+
+// Q d for the difference d = B - A of two endpoints (each component below 2^20 in magnitude).
+inline std::array<int32_t, 3> WeightedAxis(const Endpoints& ends) {
+  const int32_t d[3] = {ends.b.r - ends.a.r, ends.b.g - ends.a.g, ends.b.b - ends.a.b};
+  std::array<int32_t, 3> q{};
+  for (int j = 0; j < 3; ++j) q[j] = kErrorWeights[j][0] * d[0] + kErrorWeights[j][1] * d[1] + kErrorWeights[j][2] * d[2];
+  return q;
+}
+
+// The weight that rebuilds `c` best from `ends` in BlockError's metric: projection onto the segment
+// with the inner product x^T Q y, rounded half up. Both products stay below 2^29.
+inline uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits) {
+  if (bits == 0) return 0;
+  const int64_t m = (1 << bits) - 1;
+  const std::array<int32_t, 3> q = WeightedAxis(ends);
+  const int64_t len2 = (ends.b.r - ends.a.r) * q[0] + (ends.b.g - ends.a.g) * q[1] + (ends.b.b - ends.a.b) * q[2];
+  const int64_t dot = (c.r - ends.a.r) * q[0] + (c.g - ends.a.g) * q[1] + (c.b - ends.a.b) * q[2];
+  if (dot <= 0) return 0;
+  if (dot >= len2) return static_cast<uint32_t>(m);
+  return static_cast<uint32_t>((2 * m * dot + len2) / (2 * len2));
 }
 
 }  // namespace pointdag
