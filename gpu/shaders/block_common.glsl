@@ -78,6 +78,10 @@ uint WeightOf(ivec3 c, ivec3 a, ivec3 q, int len2, int m) {
   return uint((int64_t(2) * int64_t(m) * int64_t(dot_) + int64_t(len2)) / (int64_t(2) * int64_t(len2)));
 }
 
+i64vec3 WeightedAxis64(i64vec3 d) {
+  return i64vec3(kQ0.x * d.x + kQ0.y * d.y + kQ0.z * d.z, kQ1.x * d.x + kQ1.y * d.y + kQ1.z * d.z, kQ2.x * d.x + kQ2.y * d.y + kQ2.z * d.z);
+}
+
 ivec3 WeightedAxis(ivec3 d) {
   return ivec3(kQ0.x * d.x + kQ0.y * d.y + kQ0.z * d.z, kQ1.x * d.x + kQ1.y * d.y + kQ1.z * d.z, kQ2.x * d.x + kQ2.y * d.y + kQ2.z * d.z);
 }
@@ -126,25 +130,29 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
     const uint c = Pack(Clamp255(a.x), Clamp255(a.y), Clamp255(a.z));
     return Fit(c, c, uint64_t(sse));
   }
+  // Principal axis in BlockError's metric: v <- C (Q v), Q v shrunk too.
   i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
   Shrink(axis);
   for (int iter = 0; iter < 8; ++iter) {
-    // cov * axis, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
-    i64vec3 next = i64vec3(c0.x * axis.x + c0.y * axis.y + c0.z * axis.z, c1.x * axis.x + c1.y * axis.y + c1.z * axis.z,
-                          c2.x * axis.x + c2.y * axis.y + c2.z * axis.z);
+    i64vec3 qa = WeightedAxis64(axis);
+    Shrink(qa);
+    // cov * qa, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
+    i64vec3 next = i64vec3(c0.x * qa.x + c0.y * qa.y + c0.z * qa.z, c1.x * qa.x + c1.y * qa.y + c1.z * qa.z,
+                          c2.x * qa.x + c2.y * qa.y + c2.z * qa.z);
     if (next.x == 0 && next.y == 0 && next.z == 0) break;
     Shrink(next);
     axis = next;
   }
+  const i64vec3 qa = WeightedAxis64(axis);
   const uint first = m * kMacro + begin;
   int64_t lo = 0, hi = 0;
   for (uint i = 0; i < length; ++i) {
     const i64vec3 d = n * i64vec3(Unpack(colors[first + i])) - s;
-    const int64_t t = d.x * axis.x + d.y * axis.y + d.z * axis.z;
+    const int64_t t = d.x * qa.x + d.y * qa.y + d.z * qa.z;
     lo = min(lo, t);
     hi = max(hi, t);
   }
-  const int64_t axis2 = axis.x * axis.x + axis.y * axis.y + axis.z * axis.z;
+  const int64_t axis2 = axis.x * qa.x + axis.y * qa.y + axis.z * qa.z;
   const int64_t den = n * axis2;
   Fit best = Fit(Pack(Clamp255(RoundDiv(s.x * axis2 + lo * axis.x, den)), Clamp255(RoundDiv(s.y * axis2 + lo * axis.y, den)),
                       Clamp255(RoundDiv(s.z * axis2 + lo * axis.z, den))),

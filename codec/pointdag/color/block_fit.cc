@@ -160,25 +160,34 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     return {{c, c}, static_cast<uint64_t>(sse)};
   }
   if (give_up_above != UINT64_MAX && CannotReach(cov, n, give_up_above)) return {{}, give_up_above + 1};
-  // Principal axis by power iteration, starting from the widest channel's column.
+  // Principal axis in BlockError's metric (that of the colors' covariance with Q: v <- C Q v, the
+  // RGB image of the principal axis of L^T C L, Q = L L^T) by power iteration, starting from the
+  // widest channel's column. Q v is shrunk too, so that C (Q v) stays below 2^57.
   int64_t axis[3] = {cov[0][widest], cov[1][widest], cov[2][widest]};
   Shrink(axis);
+  int64_t qa[3];
+  const auto weigh = [&] {
+    for (int j = 0; j < 3; ++j) qa[j] = kErrorWeights[j][0] * axis[0] + kErrorWeights[j][1] * axis[1] + kErrorWeights[j][2] * axis[2];
+  };
   for (int iter = 0; iter < kPowerIterations; ++iter) {
+    weigh();
+    Shrink(qa);
     int64_t next[3];
-    for (int j = 0; j < 3; ++j) next[j] = cov[j][0] * axis[0] + cov[j][1] * axis[1] + cov[j][2] * axis[2];
+    for (int j = 0; j < 3; ++j) next[j] = cov[j][0] * qa[0] + cov[j][1] * qa[1] + cov[j][2] * qa[2];
     if (next[0] == 0 && next[1] == 0 && next[2] == 0) break;
     Shrink(next);
     std::copy(next, next + 3, axis);
   }
-  // Extent of the colors along the axis (projections scaled by n), endpoints at both ends.
+  // Extent of the colors along the axis (projections (n c - s)^T Q axis), endpoints at both ends.
+  weigh();
   const Rgb8* colors = colors_.data() + begin;
   int64_t lo = 0, hi = 0;
   for (uint32_t i = 0; i < length; ++i) {
     int64_t t = 0;
-    for (int k = 0; k < 3; ++k) t += (n * Channel(colors[i], k) - sums.s[k]) * axis[k];
+    for (int k = 0; k < 3; ++k) t += (n * Channel(colors[i], k) - sums.s[k]) * qa[k];
     lo = std::min(lo, t), hi = std::max(hi, t);
   }
-  const int64_t axis2 = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2];
+  const int64_t axis2 = axis[0] * qa[0] + axis[1] * qa[1] + axis[2] * qa[2];
   const auto along = [&](int64_t t, int k) { return Clamp255(RoundDiv(sums.s[k] * axis2 + t * axis[k], n * axis2)); };
   const Endpoints ends{{along(lo, 0), along(lo, 1), along(lo, 2)}, {along(hi, 0), along(hi, 1), along(hi, 2)}};
 
