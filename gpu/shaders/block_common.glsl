@@ -56,10 +56,10 @@ uint Pack(uint r, uint g, uint b) { return r | (g << 8) | (b << 16); }
 
 uint64_t MaxSse(uint length) {
   const uint64_t scaled = uint64_t(params.threshold_lo) | (uint64_t(params.threshold_hi) << 32);
-  return uint64_t(length) * scaled / 1024ul;
+  return uint64_t(length) * scaled;
 }
 
-uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 4u; }
+uint BlockCost(uint length, uint bits) { return 300u + (bits != 0u ? 300u : 0u) + length * bits; }
 
 void Shrink(inout i64vec3 v) {
   const int64_t largest = max(max(Abs64(v.x), Abs64(v.y)), Abs64(v.z));
@@ -67,17 +67,31 @@ void Shrink(inout i64vec3 v) {
   v = v >> shift;
 }
 
-uint WeightOf(ivec3 c, ivec3 a, ivec3 d, int len2, int m) {
-  const int dot_ = (c.x - a.x) * d.x + (c.y - a.y) * d.y + (c.z - a.z) * d.z;
+// kErrorWeights and BlockError (block_fit.h): the luma-weighted error in 1/1024ths, by rows.
+const ivec3 kQ0 = ivec3(274, 373, 6), kQ1 = ivec3(373, 1753, 71), kQ2 = ivec3(6, 71, 145);
+
+// ChooseWeight (block_fit.h): projection in BlockError's metric; q = Q (B - A), len2 = (B - A)^T q.
+uint WeightOf(ivec3 c, ivec3 a, ivec3 q, int len2, int m) {
+  const int dot_ = (c.x - a.x) * q.x + (c.y - a.y) * q.y + (c.z - a.z) * q.z;
   if (dot_ <= 0) return 0u;
   if (dot_ >= len2) return uint(m);
-  return uint((2 * m * dot_ + len2) / (2 * len2));
+  return uint((int64_t(2) * int64_t(m) * int64_t(dot_) + int64_t(len2)) / (int64_t(2) * int64_t(len2)));
+}
+
+i64vec3 WeightedAxis64(i64vec3 d) {
+  return i64vec3(kQ0.x * d.x + kQ0.y * d.y + kQ0.z * d.z, kQ1.x * d.x + kQ1.y * d.y + kQ1.z * d.z, kQ2.x * d.x + kQ2.y * d.y + kQ2.z * d.z);
+}
+
+ivec3 WeightedAxis(ivec3 d) {
+  return ivec3(kQ0.x * d.x + kQ0.y * d.y + kQ0.z * d.z, kQ1.x * d.x + kQ1.y * d.y + kQ1.z * d.z, kQ2.x * d.x + kQ2.y * d.y + kQ2.z * d.z);
 }
 
 uint ErrorOf(ivec3 c, ivec3 a, ivec3 b, uint w, uint m) {
   const uvec3 r = (uvec3(a) * (m - w) + uvec3(b) * w + m / 2u) / m;
   const ivec3 e = c - ivec3(r);
-  return uint(e.x * e.x + e.y * e.y + e.z * e.z);
+  const ivec3 q = ivec3(kQ0.x * e.x + kQ0.y * e.y + kQ0.z * e.z, kQ1.x * e.x + kQ1.y * e.y + kQ1.z * e.z,
+                        kQ2.x * e.x + kQ2.y * e.y + kQ2.z * e.z);
+  return uint(e.x * q.x + e.y * q.y + e.z * q.z);
 }
 
 struct Fit {
@@ -107,29 +121,38 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   const int64_t widest_var = widest == 0 ? c0.x : (widest == 1 ? c1.y : c2.z);
   if (bits == 0 || widest_var == 0) {
     const i64vec3 a = i64vec3(RoundDiv(s.x, n), RoundDiv(s.y, n), RoundDiv(s.z, n));
+    // sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k): squares, then products rg rb gb (twice each).
     const i64vec3 e = sq - 2 * a * s + n * a * a;
+    const i64vec3 p = pr - i64vec3(a.x * s.y + a.y * s.x, a.x * s.z + a.z * s.x, a.y * s.z + a.z * s.y) +
+                      n * i64vec3(a.x * a.y, a.x * a.z, a.y * a.z);
+    const int64_t sse = int64_t(kQ0.x) * e.x + int64_t(kQ1.y) * e.y + int64_t(kQ2.z) * e.z +
+                        2 * (int64_t(kQ0.y) * p.x + int64_t(kQ0.z) * p.y + int64_t(kQ1.z) * p.z);
     const uint c = Pack(Clamp255(a.x), Clamp255(a.y), Clamp255(a.z));
-    return Fit(c, c, uint64_t(e.x) + uint64_t(e.y) + uint64_t(e.z));
+    return Fit(c, c, uint64_t(sse));
   }
+  // Principal axis in BlockError's metric: v <- C (Q v), Q v shrunk too.
   i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
   Shrink(axis);
   for (int iter = 0; iter < 8; ++iter) {
-    // cov * axis, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
-    i64vec3 next = i64vec3(c0.x * axis.x + c0.y * axis.y + c0.z * axis.z, c1.x * axis.x + c1.y * axis.y + c1.z * axis.z,
-                          c2.x * axis.x + c2.y * axis.y + c2.z * axis.z);
+    i64vec3 qa = WeightedAxis64(axis);
+    Shrink(qa);
+    // cov * qa, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
+    i64vec3 next = i64vec3(c0.x * qa.x + c0.y * qa.y + c0.z * qa.z, c1.x * qa.x + c1.y * qa.y + c1.z * qa.z,
+                          c2.x * qa.x + c2.y * qa.y + c2.z * qa.z);
     if (next.x == 0 && next.y == 0 && next.z == 0) break;
     Shrink(next);
     axis = next;
   }
+  const i64vec3 qa = WeightedAxis64(axis);
   const uint first = m * kMacro + begin;
   int64_t lo = 0, hi = 0;
   for (uint i = 0; i < length; ++i) {
     const i64vec3 d = n * i64vec3(Unpack(colors[first + i])) - s;
-    const int64_t t = d.x * axis.x + d.y * axis.y + d.z * axis.z;
+    const int64_t t = d.x * qa.x + d.y * qa.y + d.z * qa.z;
     lo = min(lo, t);
     hi = max(hi, t);
   }
-  const int64_t axis2 = axis.x * axis.x + axis.y * axis.y + axis.z * axis.z;
+  const int64_t axis2 = axis.x * qa.x + axis.y * qa.y + axis.z * qa.z;
   const int64_t den = n * axis2;
   Fit best = Fit(Pack(Clamp255(RoundDiv(s.x * axis2 + lo * axis.x, den)), Clamp255(RoundDiv(s.y * axis2 + lo * axis.y, den)),
                       Clamp255(RoundDiv(s.z * axis2 + lo * axis.z, den))),
@@ -138,13 +161,13 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
                  0ul);
 
   const int mx = (1 << bits) - 1;
-  const ivec3 a = Unpack(best.a), b = Unpack(best.b), d = b - a;
-  const int len2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  const ivec3 a = Unpack(best.a), b = Unpack(best.b), d = b - a, q = WeightedAxis(d);
+  const int len2 = d.x * q.x + d.y * q.y + d.z * q.z;
   int64_t s00 = 0, s01 = 0, s11 = 0;
   i64vec3 r0 = i64vec3(0), r1 = i64vec3(0);
   for (uint i = 0; i < length; ++i) {
     const ivec3 c = Unpack(colors[first + i]);
-    const uint w = WeightOf(c, a, d, len2, mx);
+    const uint w = WeightOf(c, a, q, len2, mx);
     best.sse += uint64_t(ErrorOf(c, a, b, w, uint(mx)));
     const int64_t u = int64_t(mx) - int64_t(w), t = int64_t(w);
     s00 += u * u;
@@ -159,13 +182,13 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   const uint refined_a = Pack(Clamp255(RoundDiv(na.x, det)), Clamp255(RoundDiv(na.y, det)), Clamp255(RoundDiv(na.z, det)));
   const uint refined_b = Pack(Clamp255(RoundDiv(nb.x, det)), Clamp255(RoundDiv(nb.y, det)), Clamp255(RoundDiv(nb.z, det)));
   if (refined_a == best.a && refined_b == best.b) return best;
-  const ivec3 a2 = Unpack(refined_a), b2 = Unpack(refined_b), d2 = b2 - a2;
-  const int len2b = d2.x * d2.x + d2.y * d2.y + d2.z * d2.z;
+  const ivec3 a2 = Unpack(refined_a), b2 = Unpack(refined_b), d2 = b2 - a2, q2 = WeightedAxis(d2);
+  const int len2b = d2.x * q2.x + d2.y * q2.y + d2.z * q2.z;
   const uint64_t stop = min(best.sse, give_up_above);
   uint64_t sse = 0;
   for (uint i = 0; i < length && sse <= stop; ++i) {
     const ivec3 c = Unpack(colors[first + i]);
-    sse += uint64_t(ErrorOf(c, a2, b2, WeightOf(c, a2, d2, len2b, mx), uint(mx)));
+    sse += uint64_t(ErrorOf(c, a2, b2, WeightOf(c, a2, q2, len2b, mx), uint(mx)));
   }
   if (sse < best.sse) best = Fit(refined_a, refined_b, sse);
   return best;

@@ -43,7 +43,8 @@ struct ColorBlock {
 
 enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
 
-// `max_mse` bounds each block's mean squared error per channel (0 keeps every color exact where the
+// `max_mse` bounds each block's mean luma-weighted error per channel (BlockError / 3, block_fit.h;
+// the RGB squared error for gray differences; 0 keeps every color exact where the
 // model allows). Blocks come out sorted, covering every color once, never across macro blocks.
 // Runs on Vulkan where ColorBlocksDevice() says so, with the same result; an error only from there
 // (POINTDAG_DEVICE unknown, or `vulkan` without a device, or the device failing).

@@ -29,7 +29,7 @@ struct Endpoints {
 
 struct BlockFit {
   Endpoints ends;
-  uint64_t sse = 0;  // squared error summed over the block's colors and their three channels
+  uint64_t sse = 0;  // BlockError summed over the block's colors
 };
 
 // Fits blocks inside one run of colors (a macro block). Prefix sums of the colors and of their
@@ -55,18 +55,6 @@ class BlockFitter {
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
 };
 
-// The weight that rebuilds `c` best from `ends` (projection onto the segment, rounded half up).
-inline uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits) {
-  if (bits == 0) return 0;
-  const int32_t m = (1 << bits) - 1;
-  const int32_t dr = ends.b.r - ends.a.r, dg = ends.b.g - ends.a.g, db = ends.b.b - ends.a.b;
-  const int32_t len2 = dr * dr + dg * dg + db * db;
-  const int32_t dot = (c.r - ends.a.r) * dr + (c.g - ends.a.g) * dg + (c.b - ends.a.b) * db;
-  if (dot <= 0) return 0;
-  if (dot >= len2) return static_cast<uint32_t>(m);
-  return static_cast<uint32_t>((2 * m * dot + len2) / (2 * len2));
-}
-
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
   if (bits == 0) return e.a;
   const uint32_t m = (1u << bits) - 1;
@@ -77,6 +65,40 @@ inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
 inline uint32_t SquaredError(const Rgb8& x, const Rgb8& y) {
   const int32_t dr = x.r - y.r, dg = x.g - y.g, db = x.b - y.b;
   return static_cast<uint32_t>(dr * dr + dg * dg + db * db);
+}
+
+// The error blocks are judged by, in 1/1024ths: d^T Q d for the RGB difference d, with Q = 1024 (3 y y^T
+// + w (cb cb^T + cr cr^T)) rounded, y, cb, cr the BT.709 luma and chroma rows. Quality is judged on
+// PSNR-Y, so luma counts 3/w times more than chroma (w = 1/2: MPEG's 6:1:1); a gray difference costs what
+// the RGB squared error does. Q is positive definite, so every term sum below is >= 0.
+constexpr int32_t kErrorWeights[3][3] = {{274, 373, 6}, {373, 1753, 71}, {6, 71, 145}};
+
+inline uint32_t BlockError(const Rgb8& x, const Rgb8& y) {
+  const int32_t d[3] = {x.r - y.r, x.g - y.g, x.b - y.b};
+  int32_t e = 0;
+  for (int j = 0; j < 3; ++j) e += d[j] * (kErrorWeights[j][0] * d[0] + kErrorWeights[j][1] * d[1] + kErrorWeights[j][2] * d[2]);
+  return static_cast<uint32_t>(e);
+}
+
+// Q d for the difference d = B - A of two endpoints (each component below 2^20 in magnitude).
+inline std::array<int32_t, 3> WeightedAxis(const Endpoints& ends) {
+  const int32_t d[3] = {ends.b.r - ends.a.r, ends.b.g - ends.a.g, ends.b.b - ends.a.b};
+  std::array<int32_t, 3> q{};
+  for (int j = 0; j < 3; ++j) q[j] = kErrorWeights[j][0] * d[0] + kErrorWeights[j][1] * d[1] + kErrorWeights[j][2] * d[2];
+  return q;
+}
+
+// The weight that rebuilds `c` best from `ends` in BlockError's metric: projection onto the segment
+// with the inner product x^T Q y, rounded half up. Both products stay below 2^29.
+inline uint32_t ChooseWeight(const Rgb8& c, const Endpoints& ends, int bits) {
+  if (bits == 0) return 0;
+  const int64_t m = (1 << bits) - 1;
+  const std::array<int32_t, 3> q = WeightedAxis(ends);
+  const int64_t len2 = (ends.b.r - ends.a.r) * q[0] + (ends.b.g - ends.a.g) * q[1] + (ends.b.b - ends.a.b) * q[2];
+  const int64_t dot = (c.r - ends.a.r) * q[0] + (c.g - ends.a.g) * q[1] + (c.b - ends.a.b) * q[2];
+  if (dot <= 0) return 0;
+  if (dot >= len2) return static_cast<uint32_t>(m);
+  return static_cast<uint32_t>((2 * m * dot + len2) / (2 * len2));
 }
 
 }  // namespace pointdag
