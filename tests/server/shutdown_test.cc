@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <memory>
 #include <thread>
 
 #include "daemon_util.h"
@@ -15,31 +16,35 @@ namespace {
 
 using client::Connection;
 
-// A daemon configured with `grace_s`; its store, folder and log under `scratch`.
-Daemon WithGrace(const testing::ScratchDir& scratch, int grace_s) {
-  std::ofstream(scratch / "pointdagd.toml") << "shutdown_grace_s = " << grace_s << "\n";
-  return Daemon(scratch.path(), {"--config", (scratch / "pointdagd.toml").string()});
-}
-
-// Uploads lion and waits until its ingest runs.
-std::string StartLionIngest(Connection& c) {
-  const std::string location = SubmitScan(c, "lion_takanawa_pdrf7_rgb.las", "name=lion");
-  for (int i = 0; i < 1000 && !location.empty(); ++i) {
-    if (Json(*c.Request("GET", location))["status"] == "running") return location;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+// A daemon configured with `grace_s` (its store, folder and log in a scratch folder), with lion's
+// ingest running on it.
+class Shutdown : public ::testing::Test {
+ protected:
+  void StartLionIngest(int grace_s) {
+    std::ofstream(scratch_ / "pointdagd.toml") << "shutdown_grace_s = " << grace_s << "\n";
+    daemon_ = std::make_unique<Daemon>(scratch_.path(), std::vector<std::string>{"--config", (scratch_ / "pointdagd.toml").string()});
+    ASSERT_TRUE(daemon_->Start());
+    c_ = daemon_->Connect();
+    ASSERT_NE(c_, nullptr);
+    lion_ = SubmitScan(*c_, "lion_takanawa_pdrf7_rgb.las", "name=lion");
+    for (int i = 0; i < 1000 && !lion_.empty(); ++i) {
+      if (Json(*c_->Request("GET", lion_))["status"] == "running") return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    FAIL() << "the ingest never ran";
   }
-  ADD_FAILURE() << "the ingest never ran";
-  return location;
-}
 
-TEST(Shutdown, SigtermLetsTheRunningJobFinishWithinTheGracePeriod) {
+  testing::ScratchDir scratch_;
+  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<Connection> c_;
+  std::string lion_;  // the job's location
+};
+
+TEST_F(Shutdown, SigtermLetsTheRunningJobFinishWithinTheGracePeriod) {
   SKIP_WITHOUT_DATA();
-  testing::ScratchDir scratch;
-  Daemon daemon = WithGrace(scratch, 120);
-  ASSERT_TRUE(daemon.Start());
-  auto c = daemon.Connect();
-  ASSERT_NE(c, nullptr);
-  StartLionIngest(*c);
+  ASSERT_NO_FATAL_FAILURE(StartLionIngest(120));
+  Daemon& daemon = *daemon_;
+  auto& c = c_;
   // A second upload waits in the queue: it must not start during the grace period.
   const std::string queued = SubmitScan(*c, "autzen_trim_pdrf3_rgb.las", "name=autzen");
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.Log();
@@ -55,14 +60,12 @@ TEST(Shutdown, SigtermLetsTheRunningJobFinishWithinTheGracePeriod) {
   EXPECT_EQ(WaitForJob(*c, queued)["status"], "done");
 }
 
-TEST(Shutdown, AJobStillRunningAfterTheGracePeriodResumesWithoutLosingAnAttempt) {
+TEST_F(Shutdown, AJobStillRunningAfterTheGracePeriodResumesWithoutLosingAnAttempt) {
   SKIP_WITHOUT_DATA();
-  testing::ScratchDir scratch;
-  Daemon daemon = WithGrace(scratch, 0);
-  ASSERT_TRUE(daemon.Start());
-  auto c = daemon.Connect();
-  ASSERT_NE(c, nullptr);
-  const std::string location = StartLionIngest(*c);
+  ASSERT_NO_FATAL_FAILURE(StartLionIngest(0));
+  Daemon& daemon = *daemon_;
+  auto& c = c_;
+  const std::string location = lion_;
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.Log();
   EXPECT_NE(daemon.Log().find("leaving with 1 job(s) still running after the 0 s grace period"), std::string::npos) << daemon.Log();
   EXPECT_EQ(testing::QueryText(daemon.store(), "SELECT COUNT(*) FROM datasets"), "0");
