@@ -115,11 +115,15 @@ TEST(DaemonStart, ConfigMistakesStopTheStart) {
 
 // The shipped configuration is valid as it stands.
 TEST(DaemonStart, TheShippedConfigLoads) {
-  testing::ScratchDir scratch;
-  Daemon daemon(scratch.path(), {"--config", std::string(POINTDAG_SOURCE_DIR) + "/configs/pointdagd.toml"});
-  ASSERT_TRUE(daemon.Start());
-  auto c = daemon.Connect();
-  EXPECT_EQ(c->Request("GET", "/livez")->status, 200);
+  // The container's and the production example's too (the test's flags put them on loopback and a
+  // scratch folder).
+  for (const char* config : {"pointdagd.toml", "container.toml", "production.toml"}) {
+    testing::ScratchDir scratch;
+    Daemon daemon(scratch.path(), {"--config", std::string(POINTDAG_SOURCE_DIR) + "/configs/" + config});
+    ASSERT_TRUE(daemon.Start()) << config;
+    auto c = daemon.Connect();
+    EXPECT_EQ(c->Request("GET", "/livez")->status, 200) << config;
+  }
 }
 
 }  // namespace
