@@ -5,6 +5,7 @@
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/block_stream.h"
 #include "pointdag/color/block_target.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/image_mapping.h"
@@ -131,6 +132,22 @@ TEST(BlockCodec, EqualColorsBecomeOneZeroBitBlockPerMacroBlock) {
   auto decoder = BlockColorDecoder::Open(*SerializeBlocks(colors, blocks, BlockLayout::kVariableRate), colors.size());
   ASSERT_TRUE(decoder.ok());
   EXPECT_EQ(decoder->DecodeAll(), colors);
+}
+
+// Files written before version 2 (channel differences) still decode, to the same colors.
+TEST(BlockCodec, VersionOneStreamsStillDecode) {
+  const auto colors = SyntheticColors(20000, 7);
+  for (BlockLayout layout : {BlockLayout::kVariableRate, BlockLayout::kFixedRate}) {
+    const auto blocks = *EncodeBlocks(colors, layout, 20.0);
+    const auto v1 = *SerializeBlocksAsVersion(colors, blocks, layout, 1);
+    const auto v2 = *SerializeBlocks(colors, blocks, layout);
+    ASSERT_EQ(v1[0], 1);
+    ASSERT_EQ(v2[0], kBlockStreamVersion);
+    auto old = BlockColorDecoder::Open(v1, colors.size());
+    ASSERT_TRUE(old.ok()) << old.status().ToString();
+    EXPECT_EQ(old->DecodeAll(), BlockColorDecoder::Open(v2, colors.size())->DecodeAll());
+    EXPECT_EQ(old->DecodeAll(), EncoderReconstruction(colors, blocks));
+  }
 }
 
 // Colors every threshold codes exactly measure an infinite PSNR: the target search must still end
@@ -378,8 +395,9 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   ASSERT_TRUE(scan.ok());
   const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
   const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 9596u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9342u);
+  // Block stream version 2 (endpoint differences as dG, dR - dG, dB - dG); version 1: 9596 and 9342.
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 9146u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9148u);
   // Lossless version 2 (context coder): from neighbours found by Morton code, and from the previous
   // color alone (mipmap order). Version 1 (zstd differences) took 72993 bytes; 46558 before the radius-4 search for isolated voxels.
   const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};

@@ -6,6 +6,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { before, describe, test } from 'node:test';
 
+import { decodeBlockColors } from '../../web/src/decoder/block_colors.js';
 import { decodeDag } from '../../web/src/decoder/dag_stream.js';
 import { PdagError, decodePdag } from '../../web/src/decoder/decode_pdag.js';
 import { WASM_SKIPPED, config, loadWasm, scan } from './lib/config.mjs';
@@ -215,6 +216,22 @@ describe('geometry stream versions', () => {
       assert.equal(v1[0], 1);
       assert.equal(v2[0], 2);
       assert.deepEqual(decodeDag(v2), decodeDag(v1));
+    }
+  });
+});
+
+// Block color stream version 1 (channel differences) still decodes: the version 2 seeds hold the
+// version 1 seeds' decoded colors, re-encoded exactly (tests/codec/color_test.cc checks C++ alike).
+describe('color stream versions', () => {
+  test('vbr and fixed3 version 1 and version 2 decode to the same colors', () => {
+    const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/${name}`, import.meta.url)));
+    for (const name of ['color_vbr/vbrquality34coderzstd', 'color_fixed3/fixed3quality34']) {
+      const v1 = seed(`${name}.bin`);
+      const v2 = seed(`${name}_v2.bin`);
+      const count = v1[0] | (v1[1] << 8) | (v1[2] << 16);
+      assert.equal(v1[3], 1);
+      assert.equal(v2[3], 2);
+      assert.deepEqual(decodeBlockColors(v2.subarray(3), count), decodeBlockColors(v1.subarray(3), count));
     }
   });
 });

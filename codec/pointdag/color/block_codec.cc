@@ -202,7 +202,14 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout) {
-  std::vector<uint8_t> out = {kBlockStreamVersion, static_cast<uint8_t>(layout), 0, 0};
+  return SerializeBlocksAsVersion(colors, blocks, layout, kBlockStreamVersion);
+}
+
+StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
+                                                        BlockLayout layout, uint8_t version) {
+  if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
+  const DifferenceCode code{version >= 2};
+  std::vector<uint8_t> out = {version, static_cast<uint8_t>(layout), 0, 0};
   PutVarint(out, colors.size());
   PutVarint(out, blocks.size());
   auto models = std::make_unique<BlockModels>();
@@ -217,11 +224,12 @@ StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std
     next += b.length;
     EncodeGamma(rc, models->length[prev_bits], b.length, kLengthBits);
     if (layout == BlockLayout::kVariableRate) EncodeBitTree<3>(rc, models->width[prev_bits], b.bits);
-    const uint8_t a[3] = {b.ends.a.r, b.ends.a.g, b.ends.a.b}, pa[3] = {prev_a.r, prev_a.g, prev_a.b};
-    const uint8_t e[3] = {b.ends.b.r, b.ends.b.g, b.ends.b.b};
-    for (int ch = 0; ch < 3; ++ch) EncodeGamma(rc, models->a[ch], ZigZag(a[ch] - pa[ch]), kDifferenceBits);
+    const Endpoints& e = b.ends;
+    const auto a = code.Components(e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
+    for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->a[c], ZigZag(a[c]), code.MaxBits());
     if (b.bits) {
-      for (int ch = 0; ch < 3; ++ch) EncodeGamma(rc, models->b[b.bits][ch], ZigZag(e[ch] - a[ch]), kDifferenceBits);
+      const auto ba = code.Components(e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b);
+      for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->b[b.bits][c], ZigZag(ba[c]), code.MaxBits());
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = ChooseWeight(colors[i], b.ends, b.bits);

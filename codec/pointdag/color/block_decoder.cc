@@ -1,6 +1,7 @@
 // BlockColorDecoder (declared in block_codec.h): the reader of the block color stream, apart from
 // the encoder so that a decoder-only build (the WebAssembly one, web/wasm) needs neither TBB nor Vulkan.
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <string>
 
@@ -11,7 +12,8 @@ namespace pointdag {
 
 StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count) {
   if (stored.size() < 4) return Truncated("color stream is shorter than its header");
-  if (stored[0] != kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
+  if (stored[0] < 1 || stored[0] > kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
+  const DifferenceCode code{stored[0] >= 2};
   const auto layout = static_cast<BlockLayout>(stored[1]);
   if (layout != BlockLayout::kFixedRate && layout != BlockLayout::kVariableRate) return Corrupt("color stream layout is unknown");
   size_t pos = 4;
@@ -45,10 +47,13 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     if (bits > kMaxWeightBits) return Corrupt("color block has more than 4 bits per weight");
     if (length == 0 || length > count - next) return Corrupt("color block length is impossible");
     if (next / kMacroBlockColors != (next + length - 1) / kMacroBlockColors) return Corrupt("color block crosses a macro block");
-    int a[3], e[3];
-    const uint8_t pa[3] = {prev_a.r, prev_a.g, prev_a.b};
-    for (int ch = 0; ch < 3; ++ch) a[ch] = pa[ch] + UnZigZag(DecodeGamma(rc, models->a[ch], kDifferenceBits));
-    for (int ch = 0; ch < 3; ++ch) e[ch] = bits ? a[ch] + UnZigZag(DecodeGamma(rc, models->b[bits][ch], kDifferenceBits)) : a[ch];
+    std::array<int, 3> da{}, de{};  // A - previous A, B - A
+    for (int c = 0; c < 3; ++c) da[c] = UnZigZag(DecodeGamma(rc, models->a[c], code.MaxBits()));
+    for (int c = 0; bits && c < 3; ++c) de[c] = UnZigZag(DecodeGamma(rc, models->b[bits][c], code.MaxBits()));
+    da = code.Channels(da);
+    de = code.Channels(de);
+    const int a[3] = {prev_a.r + da[0], prev_a.g + da[1], prev_a.b + da[2]};
+    const int e[3] = {a[0] + de[0], a[1] + de[1], a[2] + de[2]};
     for (int ch = 0; ch < 3; ++ch) {
       if (a[ch] < 0 || a[ch] > 255 || e[ch] < 0 || e[ch] > 255) return Corrupt("color block endpoint outside 0..255");
     }

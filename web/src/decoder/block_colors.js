@@ -6,14 +6,13 @@ import { corrupt } from './pdag_error.js';
 import { GAMMA_MODELS, RangeDecoder, bitTreeModels, newModels, unZigZag } from './range_coder.js';
 import { readVarint } from './varint.js';
 
-const STREAM_VERSION = 1;
+const STREAM_VERSION = 2;  // 1 still read
 const LAYOUT_FIXED = 1;
 const LAYOUT_VARIABLE = 2;
 const FIXED_BITS = 3;
 const MAX_WEIGHT_BITS = 4;
 const MACRO_BLOCK = 16384;
 const LENGTH_BITS = 15;      // bit width of MACRO_BLOCK
-const DIFFERENCE_BITS = 9;   // zigzag of -255..255, plus one
 
 // BlockModels of block_stream.h, flattened.
 const WIDTHS = MAX_WEIGHT_BITS + 1;
@@ -29,7 +28,10 @@ const MODEL_COUNT = WEIGHT_BASE + WIDTHS * 17 * WEIGHT_TREE;  // 17 previous wei
 // -> Uint8Array(3 * expectedCount), RGB per color.
 export function decodeBlockColors(stored, expectedCount) {
   if (stored.length < 4) throw corrupt('color stream is shorter than its header');
-  if (stored[0] !== STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
+  if (stored[0] < 1 || stored[0] > STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
+  // DifferenceCode of block_stream.h: version 2 codes (dG, dR - dG, dB - dG), version 1 (dR, dG, dB).
+  const decorrelated = stored[0] >= 2;
+  const differenceBits = decorrelated ? 10 : 9;
   const layout = stored[1];
   if (layout !== LAYOUT_FIXED && layout !== LAYOUT_VARIABLE) throw corrupt('color stream layout is unknown');
   const cursor = { pos: 4 };
@@ -58,15 +60,21 @@ export function decodeBlockColors(stored, expectedCount) {
     if (bits > MAX_WEIGHT_BITS) throw corrupt('color block has more than 4 bits per weight');
     if (length === 0 || length > count - next) throw corrupt('color block length is impossible');
     if (Math.floor(next / MACRO_BLOCK) !== Math.floor((next + length - 1) / MACRO_BLOCK)) throw corrupt('color block crosses a macro block');
-    const ar = pr + unZigZag(rc.gamma(p, A_BASE, DIFFERENCE_BITS));
-    const ag = pg + unZigZag(rc.gamma(p, A_BASE + GAMMA_MODELS, DIFFERENCE_BITS));
-    const ab = pb + unZigZag(rc.gamma(p, A_BASE + 2 * GAMMA_MODELS, DIFFERENCE_BITS));
+    let d0 = unZigZag(rc.gamma(p, A_BASE, differenceBits));
+    let d1 = unZigZag(rc.gamma(p, A_BASE + GAMMA_MODELS, differenceBits));
+    let d2 = unZigZag(rc.gamma(p, A_BASE + 2 * GAMMA_MODELS, differenceBits));
+    const ar = pr + (decorrelated ? d1 + d0 : d0);
+    const ag = pg + (decorrelated ? d0 : d1);
+    const ab = pb + (decorrelated ? d2 + d0 : d2);
     let br = ar, bg = ag, bb = ab;
     if (bits) {
       const base = B_BASE + bits * 3 * GAMMA_MODELS;
-      br = ar + unZigZag(rc.gamma(p, base, DIFFERENCE_BITS));
-      bg = ag + unZigZag(rc.gamma(p, base + GAMMA_MODELS, DIFFERENCE_BITS));
-      bb = ab + unZigZag(rc.gamma(p, base + 2 * GAMMA_MODELS, DIFFERENCE_BITS));
+      d0 = unZigZag(rc.gamma(p, base, differenceBits));
+      d1 = unZigZag(rc.gamma(p, base + GAMMA_MODELS, differenceBits));
+      d2 = unZigZag(rc.gamma(p, base + 2 * GAMMA_MODELS, differenceBits));
+      br = ar + (decorrelated ? d1 + d0 : d0);
+      bg = ag + (decorrelated ? d0 : d1);
+      bb = ab + (decorrelated ? d2 + d0 : d2);
     }
     if ((ar | ag | ab | br | bg | bb) & ~0xff) throw corrupt('color block endpoint outside 0..255');
     if (3 * (next + length) > out.length) {
