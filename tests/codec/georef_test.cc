@@ -59,6 +59,61 @@ TEST(Georeference, EnuIsMetresAboutTheOriginAndTheMatrixMapsToEcef) {
   }
 }
 
+// Two georeferencers of one CRS and origin: the first maps through the fitted polynomial.
+struct FittedAndExact {
+  std::unique_ptr<Georeferencer> fitted, exact;
+};
+FittedAndExact MakePair(const std::string& crs, const std::array<double, 3>& centre, const Bounds& bounds) {
+  auto fitted = Georeferencer::Create(crs, "epsg-override", centre);
+  auto exact = Georeferencer::Create(crs, "epsg-override", centre);
+  EXPECT_TRUE(fitted.ok() && exact.ok());
+  (*fitted)->FitLocalEnu(bounds);
+  return {std::move(*fitted), std::move(*exact)};
+}
+
+TEST(Georeference, TheFittedEnuMapAgreesWithProjWithinItsToleranceInsideTheBounds) {
+  // Autzen's Lambert conformal conic, 6 km x 6 km x 300 m in feet.
+  const std::array<double, 3> centre{636500, 849200, 450};
+  const Bounds bounds{{626500, 839200, 0}, {646500, 859200, 1000}};
+  auto pair = MakePair("EPSG:2994", centre, bounds);
+  const auto error = pair.fitted->frame().enu_fit_error_m;
+  ASSERT_TRUE(error.has_value()) << "the polynomial should fit a 6 km box";
+  EXPECT_LE(*error, Georeferencer::kLocalEnuTolerance_m);
+  std::vector<std::array<double, 3>> points;
+  uint64_t state = 12345;
+  const auto next = [&] {  // uniform in [0, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / static_cast<double>(uint64_t{1} << 53);
+  };
+  for (int i = 0; i < 20000; ++i) {
+    points.push_back({bounds.min[0] + next() * 20000, bounds.min[1] + next() * 20000, next() * 1000});
+  }
+  points.push_back({700000, 849200, 450});  // outside the bounds: the exact path, bit for bit
+  auto expected = points;
+  ASSERT_TRUE(pair.fitted->ToEnu(points).ok());
+  ASSERT_TRUE(pair.exact->ToEnu(expected).ok());
+  double worst = 0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    worst = std::max(worst, std::hypot(points[i][0] - expected[i][0], points[i][1] - expected[i][1], points[i][2] - expected[i][2]));
+  }
+  EXPECT_LE(worst, Georeferencer::kLocalEnuTolerance_m);
+  EXPECT_GT(worst, 0.0) << "inside the bounds the polynomial, not PROJ, maps the points";
+  EXPECT_EQ(points.back(), expected.back());
+}
+
+TEST(Georeference, ABoxTooLargeForThePolynomialStaysExact) {
+  // Half a continent in geographic degrees: no degree-4 polynomial is within 50 µm of that.
+  const std::array<double, 3> centre{10, 45, 100};
+  const Bounds bounds{{-10, 30, 0}, {30, 60, 4000}};
+  auto pair = MakePair("EPSG:4979", centre, bounds);
+  EXPECT_FALSE(pair.fitted->frame().enu_fit_error_m.has_value());
+  std::vector<std::array<double, 3>> points = {{10, 45, 100}, {0, 50, 2000}, {25, 35, 10}};
+  auto expected = points;
+  ASSERT_TRUE(pair.fitted->ToEnu(points).ok());
+  ASSERT_TRUE(pair.exact->ToEnu(expected).ok());
+  EXPECT_EQ(points, expected);
+}
+
 TEST(Georeference, UnknownCrsIsAnError) {
   auto geo = Georeferencer::Create("EPSG:999999", "epsg-override", {0, 0, 0});
   EXPECT_EQ(geo.status().code(), StatusCode::kInvalidArgument);
@@ -81,6 +136,9 @@ TEST(Georeference, FindsTheCrsOfEachSharedScan) {
     EXPECT_EQ(framed->frame.crs_source, c.source) << c.file;
     EXPECT_NEAR(framed->frame.origin_llh[0], c.lat, 0.05) << c.file;
     EXPECT_NEAR(framed->frame.origin_llh[1], c.lon, 0.05) << c.file;
+    // A scan a few km across is mapped by the fitted polynomial.
+    ASSERT_TRUE(framed->frame.enu_fit_error_m.has_value()) << c.file;
+    EXPECT_LE(*framed->frame.enu_fit_error_m, Georeferencer::kLocalEnuTolerance_m) << c.file;
   }
   for (const char* local : {"tiny_1.2-with-color_1065pts.las", "lion_takanawa_pdrf7_rgb.las", "pcx_guanyin_cc-by-4.0_rgb.ply"}) {
     auto framed = OpenScanInFrame(testing::DataDir() / local, std::nullopt);
@@ -112,7 +170,10 @@ TEST(Georeference, BothAutzenFilesVoxelizeToTheSameEnuGrid) {
   auto b = EncodeScan(testing::DataDir() / "autzen_trim_las14_pdrf7_rgb.las", options);
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_EQ(a->grid.morton, b->grid.morton);
-  EXPECT_EQ(a->grid.origin, b->grid.origin);
+  // Each file's ENU map is a polynomial fitted over its own header bounds: equal within its tolerance.
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_NEAR(a->grid.origin[axis], b->grid.origin[axis], Georeferencer::kLocalEnuTolerance_m);
+  }
   EXPECT_EQ(a->file.meta["frame"]["epsg"], nlohmann::json());  // user-defined WKT without an EPSG id
   EXPECT_EQ(a->file.meta["frame"]["enu_origin"], b->file.meta["frame"]["enu_origin"]);
   // The crop is about 1180 x 560 ft: in metres, 360 x 171.

@@ -1,5 +1,7 @@
 #include "pointdag/georef/georeference.h"
 
+#include "pointdag/georef/local_enu_map.h"
+
 #include <GeographicLib/Geocentric.hpp>
 #include <GeographicLib/LocalCartesian.hpp>
 #include <proj.h>
@@ -7,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <optional>
 
 #include <cmath>
 #include <vector>
@@ -33,6 +36,7 @@ struct Georeferencer::Impl {
   double z_scale = 1;           // applied before PROJ when the CRS has no vertical axis
   GeographicLib::LocalCartesian enu;
   tbb::enumerable_thread_specific<ProjLane> lanes;
+  std::optional<LocalEnuMap> local;  // set by FitLocalEnu: the fast path inside the scan's bounds
 
   ~Impl() {
     lanes.clear();
@@ -172,29 +176,44 @@ Status Georeferencer::Transform(std::span<std::array<double, 3>> points, bool to
   std::atomic<bool> all_ok{true};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
     const std::span<std::array<double, 3>> part = points.subspan(r.begin(), r.size());
-    PJ* pj = impl_->Lane();
-    if (!pj) {
-      all_ok = false;
+    if (!to_enu || !impl_->local) {
+      if (!TransformExactly(part, to_enu)) all_ok = false;
       return;
     }
-    if (impl_->z_scale != 1.0) {
-      for (auto& p : part) p[2] *= impl_->z_scale;
-    }
-    constexpr size_t stride = sizeof(std::array<double, 3>);
-    proj_trans_generic(pj, PJ_FWD, &part[0][0], stride, part.size(), &part[0][1], stride, part.size(), &part[0][2],
-                       stride, part.size(), nullptr, 0, 0);
-    for (auto& p : part) {
-      // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
-      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || std::abs(p[1]) > 90.0) {
-        all_ok = false;
-        return;
-      }
-      std::swap(p[0], p[1]);
-      if (to_enu) impl_->enu.Forward(p[0], p[1], p[2], p[0], p[1], p[2]);
-    }
+    std::vector<size_t> outside;
+    impl_->local->Apply(part, outside);
+    if (outside.empty()) return;
+    std::vector<std::array<double, 3>> rest;
+    for (size_t i : outside) rest.push_back(part[i]);
+    if (!TransformExactly(rest, true)) all_ok = false;
+    for (size_t k = 0; k < outside.size(); ++k) part[outside[k]] = rest[k];
   });
   if (!all_ok) return InvalidArgument("coordinates outside the domain of " + frame_.crs_name + ": PROJ cannot transform them");
   return Status::Ok();
+}
+
+bool Georeferencer::TransformExactly(std::span<std::array<double, 3>> part, bool to_enu) const {
+  PJ* pj = impl_->Lane();
+  if (!pj) return false;
+  if (impl_->z_scale != 1.0) {
+    for (auto& p : part) p[2] *= impl_->z_scale;
+  }
+  constexpr size_t stride = sizeof(std::array<double, 3>);
+  proj_trans_generic(pj, PJ_FWD, &part[0][0], stride, part.size(), &part[0][1], stride, part.size(), &part[0][2], stride,
+                     part.size(), nullptr, 0, 0);
+  for (auto& p : part) {
+    // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || std::abs(p[1]) > 90.0) return false;
+    std::swap(p[0], p[1]);
+    if (to_enu) impl_->enu.Forward(p[0], p[1], p[2], p[0], p[1], p[2]);
+  }
+  return true;
+}
+
+void Georeferencer::FitLocalEnu(const Bounds& bounds) {
+  impl_->local.reset();
+  impl_->local = LocalEnuMap::Fit(bounds, [this](std::span<std::array<double, 3>> p) { return ToEnu(p); }, kLocalEnuTolerance_m);
+  frame_.enu_fit_error_m = impl_->local ? std::optional(impl_->local->max_error_m()) : std::nullopt;
 }
 
 Status Georeferencer::ToGeographic(std::span<std::array<double, 3>> points) const { return Transform(points, false); }
@@ -251,6 +270,7 @@ StatusOr<FramedReader> OpenScanInFrame(const std::filesystem::path& path, std::o
   const std::array<double, 3> centre = {(bounds->min[0] + bounds->max[0]) / 2, (bounds->min[1] + bounds->max[1]) / 2,
                                         (bounds->min[2] + bounds->max[2]) / 2};
   ASSIGN_OR_RETURN(std::unique_ptr<Georeferencer> georeferencer, Georeferencer::Create(crs->first, crs->second, centre));
+  georeferencer->FitLocalEnu(*bounds);
   out.frame = georeferencer->frame();
   out.reader = std::make_unique<EnuReader>(std::move(out.reader), std::move(georeferencer));
   return out;
@@ -265,6 +285,7 @@ nlohmann::json DescribeFrame(const GeoFrame& frame) {
   out["vertical_unit_m"] = frame.vertical_unit_m;
   out["enu_origin"] = {{"lat", frame.origin_llh[0]}, {"lon", frame.origin_llh[1]}, {"h", frame.origin_llh[2]}};
   out["enu_to_ecef"] = frame.enu_to_ecef;
+  out["enu_fit_error_m"] = frame.enu_fit_error_m ? nlohmann::json(*frame.enu_fit_error_m) : nlohmann::json();
   return out;
 }
 

@@ -33,6 +33,9 @@ struct GeoFrame {
   std::string vertical;        // how heights were treated
   std::array<double, 3> origin_llh{0, 0, 0};  // lat, lon (degrees), ellipsoidal h (m)
   std::array<double, 16> enu_to_ecef{};       // column-major 4x4, as 3D Tiles and Cesium use
+  // Set when ToEnu maps the scan's bounds through a fitted polynomial (local_enu_map.h): its worst
+  // error against the exact transform, metres.
+  std::optional<double> enu_fit_error_m;
 };
 
 // The CRS definition PROJ should use for a scan, or nullopt when it has none.
@@ -52,11 +55,17 @@ class Georeferencer {
   Status ToGeographic(std::span<std::array<double, 3>> points) const;
   // Source coordinates -> ENU metres about the origin, in place.
   Status ToEnu(std::span<std::array<double, 3>> points) const;
+  // From now on ToEnu maps points inside `bounds` through a fitted polynomial when one is within
+  // kLocalEnuTolerance_m of the exact transform everywhere in them (else it stays exact);
+  // frame().enu_fit_error_m says which. Not thread-safe against concurrent ToEnu.
+  void FitLocalEnu(const Bounds& bounds);
+  static constexpr double kLocalEnuTolerance_m = 5e-5;
 
  private:
   struct Impl;
   explicit Georeferencer(std::unique_ptr<Impl> impl);
   Status Transform(std::span<std::array<double, 3>> points, bool to_enu) const;
+  bool TransformExactly(std::span<std::array<double, 3>> part, bool to_enu) const;  // false: a point failed
   std::unique_ptr<Impl> impl_;
   GeoFrame frame_;
 };
