@@ -18,8 +18,8 @@
 namespace pointdag {
 namespace {
 
-// Version 2 changes coder 2's mask contexts only (PDAG_FORMAT §2.2); version 1 streams still decode.
-constexpr uint8_t kStreamVersion = 2;
+// Versions 2 and 3 change coder 2's mask contexts only (PDAG_FORMAT §2.2); versions 1 and 2 still decode.
+constexpr uint8_t kStreamVersion = 3;
 constexpr int kZstdLevel = 19;
 
 // Mask contexts: internal nodes by height (3..21), brick cell masks, brick voxel masks. Measured:
@@ -272,7 +272,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
-  if (bytes[0] != 1 && bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[0] < 1 || bytes[0] > kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
   if (bytes[1] > 2) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];
