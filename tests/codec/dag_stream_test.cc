@@ -106,7 +106,7 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
 }
 
 // Versions 1 (coder 2 without edge neighbours) and 2 (without the mixer) still decode: the fuzz
-// seeds of tiny at 40 ft in all three versions hold one DAG, and writers write version 3.
+// seeds of tiny at 40 ft in all three versions hold one DAG; writers write version 3 unless asked.
 TEST(DagStream, SpatialVersions1And2StillDecode) {
   const auto read = [](const std::string& name) {
     std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
@@ -123,6 +123,8 @@ TEST(DagStream, SpatialVersions1And2StillDecode) {
     EXPECT_EQ(DecodeDag(v2).value(), dag);
     EXPECT_EQ(DecodeDag(v3).value(), dag);
     EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v3);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 2).value(), v2);  // older versions stay writable
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 1).value(), v1);
     EXPECT_LT(v2.size(), v1.size());
     EXPECT_LT(v3.size(), v2.size());
   }
