@@ -105,22 +105,28 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
   }
 }
 
-// Version 1 streams (coder 2 without edge neighbours) still decode: the fuzz seeds of tiny at 40 ft
-// in both versions hold one DAG, and writers write version 2.
-TEST(DagStream, SpatialVersion1StillDecodes) {
-  const auto read = [](const char* name) {
+// Versions 1 (coder 2 without edge neighbours) and 2 (without the mixer) still decode: the fuzz
+// seeds of tiny at 40 ft in all three versions hold one DAG; writers write version 3 unless asked.
+TEST(DagStream, SpatialVersions1And2StillDecode) {
+  const auto read = [](const std::string& name) {
     std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
     return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
   };
-  for (const char* mode : {"leaves", "mipmap"}) {
-    const auto v1 = read((std::string(mode) + "_spatial.bin").c_str());
-    const auto v2 = read((std::string(mode) + "_spatial_v2.bin").c_str());
+  for (const std::string mode : {"leaves", "mipmap"}) {
+    const auto v1 = read(mode + "_spatial.bin");
+    const auto v2 = read(mode + "_spatial_v2.bin");
+    const auto v3 = read(mode + "_spatial_v3.bin");
     ASSERT_EQ(v1.at(0), 1);
     ASSERT_EQ(v2.at(0), 2);
+    ASSERT_EQ(v3.at(0), 3);
     const Svdag dag = DecodeDag(v1).value();
     EXPECT_EQ(DecodeDag(v2).value(), dag);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v2);
+    EXPECT_EQ(DecodeDag(v3).value(), dag);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v3);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 2).value(), v2);  // older versions stay writable
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 1).value(), v1);
     EXPECT_LT(v2.size(), v1.size());
+    EXPECT_LT(v3.size(), v2.size());
   }
 }
 

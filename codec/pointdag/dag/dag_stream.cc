@@ -18,8 +18,6 @@
 namespace pointdag {
 namespace {
 
-// Version 2 changes coder 2's mask contexts only (PDAG_FORMAT §2.2); version 1 streams still decode.
-constexpr uint8_t kStreamVersion = 2;
 constexpr int kZstdLevel = 19;
 
 // Mask contexts: internal nodes by height (3..21), brick cell masks, brick voxel masks. Measured:
@@ -241,10 +239,11 @@ const char* GeometryCoderName(GeometryCoder coder) {
   return "?";
 }
 
-StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) {
+StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version) {
+  if (version < 1 || version > kGeometryStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
   RETURN_IF_ERROR(dag.Validate());
   ASSIGN_OR_RETURN(const DagArrays arrays, ToArrays(dag));
-  std::vector<uint8_t> out = {kStreamVersion, static_cast<uint8_t>(coder), static_cast<uint8_t>(dag.depth),
+  std::vector<uint8_t> out = {static_cast<uint8_t>(version), static_cast<uint8_t>(coder), static_cast<uint8_t>(dag.depth),
                               static_cast<uint8_t>(dag.mode)};
   // Node count of every level (bricks last): bounds the decoder's allocations before it starts.
   for (const auto& masks : arrays.masks) PutVarint(out, masks.size());
@@ -256,7 +255,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
     for (uint64_t brick : arrays.leaves) {
       if (!seen.insert(brick).second) return InvalidArgument("geometry coder 2 needs each brick stored once: one repeats");
     }
-    ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth, kStreamVersion));
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth, version));
     out.insert(out.end(), payload.begin(), payload.end());
     return out;
   }
@@ -272,7 +271,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder) 
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
-  if (bytes[0] != 1 && bytes[0] != kStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[0] < 1 || bytes[0] > kGeometryStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
   if (bytes[1] > 2) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];

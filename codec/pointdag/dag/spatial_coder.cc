@@ -6,6 +6,7 @@
 #include <memory>
 #include <unordered_map>
 
+#include "pointdag/dag/mask_mixer.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/voxelize/morton.h"
 
@@ -33,12 +34,14 @@ struct Level {
   std::vector<uint32_t> id;     // node ordinal (internal), brick index, or brick * 8 + cell
   std::vector<uint8_t> first;   // first occurrence: its mask and children are coded here
   std::vector<uint8_t> mask;    // filled as the level is coded; then a sentinel 0
+  std::vector<uint8_t> parent;  // the parent's mask (version 3's mixer)
   std::vector<std::array<int32_t, 6>> nbr;  // -x, +x, -y, +y, -z, +z on this level; -1: empty or unknown; then a sentinel row
   std::vector<uint32_t> kids;   // internal first occurrences: where their children start in DagArrays::children
   size_t size() const { return id.size(); }
   void Add(uint32_t node, bool is_first, const std::array<int32_t, 6>& n) {
     id.push_back(node);
     first.push_back(is_first ? 1 : 0);
+    parent.push_back(0);
     nbr.push_back(n);
   }
 };
@@ -197,9 +200,10 @@ Around Surroundings(const Level& lv, size_t i) {
 }
 
 // Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is
-// implied. `edges`: version 2's contexts.
+// implied. `edges`: version 2's contexts; `mix`: version 3's mixer (null before).
 template <typename Io>
-uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth, bool edges) {
+uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth,
+                 bool edges, MaskMixer* mix) {
   unsigned exists = 0;
   uint32_t facing = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -224,7 +228,9 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
         const bool diagonal = ((around.diagonal >> c) & 1u) || (m & kDiagonalSelf[c]);
         extra = ((around.outer >> c) & 1u) * 2 + (diagonal ? 1u : 0u);
       }
-      bit = io.Bit(models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra], (truth >> c) & 1);
+      auto& model = models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra];
+      bit = mix ? mix->Bit(io, model, c, m, lv.parent[i], lower, ones > 0, (truth >> c) & 1)
+                : io.Bit(model, (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;
     ones += ones < most ? static_cast<unsigned>(bit) : 0u;
@@ -245,6 +251,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
   Level next;
   next.id.resize(total);
   next.first.resize(total);
+  next.parent.resize(total);
   next.nbr.reserve(total + 1);
   next.nbr.resize(total);
   uint32_t fresh = 0;  // new ordinals assigned so far: ordinals are numbered in this order
@@ -288,6 +295,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
       }
       next.id[j] = id;
       next.first[j] = is_first ? 1 : 0;
+      next.parent[j] = static_cast<uint8_t>(mask);
       ++j;
     }
   }
@@ -298,9 +306,11 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
 // Bricks carry no back-references: every brick slot (a child of a new node of the last internal
 // level) is coded in full, `slots` holding its value, and the decoder merges equal bricks.
 template <typename Io, typename Arrays>
-Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots, bool edges) {
+Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots, int version) {
   const int levels = depth - 2;
+  const bool edges = version >= 2;
   auto models = std::make_unique<SpatialModels>();
+  std::unique_ptr<MaskMixer> mix = version >= 3 ? std::make_unique<MaskMixer>() : nullptr;
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
     if (level < levels) return a.masks[level][id];
     if (level > levels) return static_cast<uint8_t>(slots[id >> 3] >> (8 * (id & 7)));
@@ -324,7 +334,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
         cur.mask[i] = known_mask(level, id);
         continue;
       }
-      const uint8_t mask = CodeMask(io, models->mask[height], cur, i, Io::kEncoding ? known_mask(level, id) : 0, edges);
+      const uint8_t mask = CodeMask(io, models->mask[height], cur, i, Io::kEncoding ? known_mask(level, id) : 0, edges, mix.get());
       cur.mask[i] = mask;
       if constexpr (!Io::kEncoding) {
         if (level < levels) a.masks[level].push_back(mask);
@@ -374,7 +384,7 @@ StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth,
   } else {
     for (uint32_t k : arrays.children.back()) slots.push_back(arrays.leaves[k]);
   }
-  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots, version >= 2));
+  RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots, version));
   return io.Finish();
 }
 
@@ -387,7 +397,7 @@ StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, c
   for (int level = 0; level < levels; ++level) a.masks[level].reserve(counts[level]);
   std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
   DecoderIo io(payload);
-  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version >= 2));
+  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version));
   // Equal bricks become one, numbered in the order first seen: the canonical order.
   std::unordered_map<uint64_t, uint32_t> index;
   index.reserve(counts[levels]);

@@ -16,8 +16,8 @@ export const MAX_DEPTH = 21;
 export const COUNT_LEAVES = 0;
 export const COUNT_MIPMAP = 1;
 
-// Version 2 changes coder 2's mask contexts only; version 1 streams still decode.
-const STREAM_VERSION = 2;
+// Versions 2 and 3 change coder 2's mask contexts only; versions 1 and 2 still decode.
+const STREAM_VERSION = 3;
 const CODER_ZSTD = 0;
 const CODER_CONTEXT = 1;
 const CODER_SPATIAL = 2;
@@ -161,7 +161,7 @@ function addCounts(dag) {
 // `maxNodes` bounds what a lying level table may make the decoder allocate (nodes + bricks).
 export function decodeDag(bytes, maxNodes) {
   if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
-  if (bytes[0] !== 1 && bytes[0] !== STREAM_VERSION) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
+  if (!(bytes[0] >= 1 && bytes[0] <= STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
   if (bytes[1] > CODER_SPATIAL) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
   const depth = bytes[2];
   if (depth < 2 || depth > MAX_DEPTH) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);

@@ -20,6 +20,16 @@ export function newModels(count) {
   return new Uint16Array(2 * count).fill(32768);
 }
 
+// A young model's P(bit = 0) in 12 bits, and its update after `bit`, as youngBit does them.
+export const youngP0 = (p, m) => ((p[2 * m] + p[2 * m + 1]) >>> 5) | 1;
+export function youngUpdate(p, age, m, bit) {
+  const target = bit ? 0 : 65535;
+  const n = age[m];
+  p[2 * m] += ((target - p[2 * m]) * YOUNG_FAST[n]) >> 16;
+  p[2 * m + 1] += ((target - p[2 * m + 1]) * YOUNG_SLOW[n]) >> 16;
+  if (n < YOUNG) age[m] = n + 1;
+}
+
 // Bit tree of `bits` bits: models base+1 .. base+2^bits-1 (node 1, then node*2+bit).
 export const bitTreeModels = (bits) => 1 << bits;
 
@@ -101,6 +111,22 @@ export class RangeDecoder {
     p[2 * m] = f + (((target - f) * YOUNG_FAST[n]) >> 16);
     p[2 * m + 1] = s + (((target - s) * YOUNG_SLOW[n]) >> 16);
     if (n < YOUNG) age[m] = n + 1;
+    this.settle(range, code);
+    return bit;
+  }
+  // A bit coded with P(bit = 0) = p0 / 4096 given outright (version 3's mixed mask bits).
+  fixedBit(p0) {
+    let range = this.s[0];
+    let code = this.s[1];
+    const bound = Math.imul(range >>> 12, p0);
+    let bit = 0;
+    if ((code ^ SIGN) < (bound ^ SIGN)) {
+      range = bound;
+    } else {
+      code = (code - bound) | 0;
+      range = (range - bound) | 0;
+      bit = 1;
+    }
     this.settle(range, code);
     return bit;
   }

@@ -4,6 +4,7 @@
 // bricks coded in full at every slot and merged here. Returns readSymbols' shape (dag_stream.js).
 import { corrupt } from './pdag_error.js';
 import { GrowableU32 } from './growable_u32.js';
+import { MaskMixer } from './mask_mixer.js';
 import { GAMMA_MODELS, bitWidth, newModels } from './range_coder.js';
 
 const CLASSES = 22;  // heights 0..21
@@ -21,7 +22,7 @@ const rank = (mask, bit) => POP[mask & ((1 << bit) - 1)];
 function newLevel(n) {
   const nbr = new Int32Array(6 * (n + 1));
   nbr.fill(-1, 6 * n);
-  return { n, id: new Uint32Array(n), first: new Uint8Array(n), nbr, mask: new Uint8Array(n + 1), kids: new Uint32Array(n) };
+  return { n, id: new Uint32Array(n), first: new Uint8Array(n), parent: new Uint8Array(n), nbr, mask: new Uint8Array(n + 1), kids: new Uint32Array(n) };
 }
 
 // The context's parts as tables, as spatial_coder.cc builds them: SIDES[exists * 8 + c] (exists =
@@ -117,8 +118,8 @@ function edge(nbr, none, o, d1, d2) {
 }
 
 // The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied. `v2`: version
-// 2's contexts; `edges`: scratch.
-function decodeMask(rc, young, age, base, lv, i, v2, edges) {
+// 2's contexts; `edges`: scratch; `mix`: version 3's mixer (null before).
+function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
   const o = 6 * i;
   let exists = 0;
   let facing = 0;
@@ -141,7 +142,8 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges) {
       const near = ((facing >>> (4 * c)) & 7) | SIBLINGS[c * 256 + m];
       let extra = 0;
       if (v2) extra = ((around >> c) & 1) * 2 + (((around >> (8 + c)) & 1) | ((m & DIAGONAL_SELF[c]) !== 0));
-      bit = rc.youngBit(young, age, base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra);
+      const model = base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra;
+      bit = mix ? mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0) : rc.youngBit(young, age, model);
     }
     m |= bit << c;
     if (ones < most) ones += bit;
@@ -183,6 +185,7 @@ function expand(cur, level, levels, kids) {
       ++r;
       next.id[j] = id;
       next.first[j] = isFirst;
+      next.parent[j] = mask;
       for (let d = 0; d < 6; ++d) {
         const bit = 4 >> (d >> 1);
         const inside = (d & 1) ? !(c & bit) : (c & bit) !== 0;
@@ -237,6 +240,7 @@ export function decodeSpatial(rc, depth, counts, version) {
   const levels = depth - 2;
   const v2 = version >= 2;
   const edges = new Int32Array(12);
+  const mix = version >= 3 ? new MaskMixer() : null;
   const young = newModels(CLASSES * MASK_CONTEXTS);
   const age = new Uint8Array(CLASSES * MASK_CONTEXTS);
   const p = newModels(REF_BASE + CLASSES * GAMMA_MODELS);
@@ -267,7 +271,7 @@ export function decodeSpatial(rc, depth, counts, version) {
         cur.mask[i] = internal ? levelMasks[id] : level > levels ? cellByte(slotLo, slotHi, id) : cellMask(slotLo[id], slotHi[id]);
         continue;
       }
-      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges);
+      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges, mix);
       cur.mask[i] = mask;
       if (level > levels) {
         const s = id >>> 3;

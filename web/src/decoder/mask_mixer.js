@@ -1,0 +1,73 @@
+// Version 3's mask bits (proto/PDAG_FORMAT.md §2.2), as codec/pointdag/dag/mask_mixer.h mixes them,
+// bit for bit: the version 2 neighbour model's prediction mixed with those of (class, mask so far)
+// (mask so far) and (child, parent's mask, lower neighbours) by integer logistic mixing, weights
+// learnt per (child, any bit set so far); one set for all classes, fresh per stream.
+import { newModels, youngP0, youngUpdate } from './range_coder.js';
+
+// P(bit = 1) in 1/4096 at d = −2048, −1920, .., 2048 (1/256 nats).
+const KNOTS = Int32Array.from([1, 2, 4, 6, 10, 17, 27, 45, 74, 120, 194, 311, 488, 747, 1102, 1546, 2048, 2550, 2994,
+  3349, 3608, 3785, 3902, 3976, 4022, 4051, 4069, 4079, 4086, 4090, 4092, 4094, 4095]);
+
+function squash(d) {
+  const x = (d < -2047 ? -2047 : d > 2047 ? 2047 : d) + 2048;
+  const i = x >> 7;
+  const w = x & 127;
+  return (KNOTS[i] * (128 - w) + KNOTS[i + 1] * w + 64) >> 7;
+}
+
+// Its inverse on 0..4095: the least d whose squash reaches p (2047 beyond).
+const STRETCH = new Int16Array(4096);
+{
+  let next = 0;
+  for (let d = -2047; d <= 2047; ++d) {
+    for (const v = squash(d); next <= v && next < 4096; ++next) STRETCH[next] = d;
+  }
+  for (; next < 4096; ++next) STRETCH[next] = 2047;
+}
+
+const BIAS = 256;
+const MAX_WEIGHT = 1 << 22;
+const clampWeight = (w) => (w < -MAX_WEIGHT ? -MAX_WEIGHT : w > MAX_WEIGHT ? MAX_WEIGHT : w);
+
+export class MaskMixer {
+  constructor() {
+    this.tree = newModels(256);
+    this.treeAge = new Uint8Array(256);
+    this.par = newModels(8 * 256 * 8);
+    this.parAge = new Uint8Array(8 * 256 * 8);
+    this.w = new Int32Array(8 * 2 * 4);
+    for (let k = 0; k < this.w.length; k += 4) {
+      this.w[k] = 65536;
+      this.w[k + 1] = 19661;
+      this.w[k + 2] = 19661;
+    }
+  }
+  // Decodes child c's bit; `young`/`age`/`m`: the version 2 model.
+  bit(rc, young, age, m, c, soFar, parent, lower, ones) {
+    const t = (1 << c) | soFar;
+    const q = (c * 256 + parent) * 8 + lower;
+    const wi = (c * 2 + (ones ? 1 : 0)) * 4;
+    const w = this.w;
+    const s0 = STRETCH[4096 - youngP0(young, m)];
+    const s1 = STRETCH[4096 - youngP0(this.tree, t)];
+    const s2 = STRETCH[4096 - youngP0(this.par, q)];
+    // Each product is below 2^33 and their sum below 2^36: exact in doubles; floor = the C++ shift.
+    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * BIAS;
+    let d = Math.floor(dot / 65536);
+    if (d < -2047) d = -2047;
+    else if (d > 2047) d = 2047;
+    let p1 = squash(d);
+    if (p1 < 1) p1 = 1;
+    else if (p1 > 4095) p1 = 4095;
+    const bit = rc.fixedBit(4096 - p1);
+    const err = (bit << 12) - p1;
+    w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
+    w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
+    w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
+    w[wi + 3] = clampWeight(w[wi + 3] + ((BIAS * err) >> 11));
+    youngUpdate(young, age, m, bit);
+    youngUpdate(this.tree, this.treeAge, t, bit);
+    youngUpdate(this.par, this.parAge, q, bit);
+    return bit;
+  }
+}
