@@ -53,6 +53,7 @@ class BlockFitter {
 
   std::span<const Rgb8> colors_;
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
+  std::vector<uint32_t> norms_;                   // c^T Q c per color (BlockError against black)
 };
 
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
