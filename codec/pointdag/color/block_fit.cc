@@ -20,19 +20,28 @@ constexpr uint64_t kHopeless = 2;
 
 uint8_t Clamp255(int64_t v) { return static_cast<uint8_t>(std::clamp<int64_t>(v, 0, 255)); }
 
-// a / b rounded half up (floor((2a + b) / 2b)), clamped to 0..255; b > 0. Without a 64-bit division
-// (tens of cycles, a dozen per fit): the quotient in doubles is within 1 of the floor wherever the
-// clamp does not decide, and one integer step corrects it. 257 (2b) stays below 2^62 for every caller.
-uint8_t RoundDivTo255(int64_t a, int64_t b) {
-  const int64_t num = 2 * a + b, den = 2 * b;
-  int64_t q = static_cast<int64_t>(std::clamp(std::floor(double(num) / double(den)), -1.0, 256.0));
-  if (q < 256 && (q + 1) * den <= num) {
-    ++q;
-  } else if (q > -1 && q * den > num) {
-    --q;
+// a / b rounded half up (floor((2a + b) / 2b)), clamped to 0..255, for several a over one b > 0.
+// Without a 64-bit division (tens of cycles, a dozen per fit): the quotient from a double reciprocal
+// is within 1 of the floor wherever the clamp does not decide, and one integer step corrects it.
+// 257 (2b) stays below 2^62 for every caller.
+class RoundDivider {
+ public:
+  explicit RoundDivider(int64_t b) : b_(b), inverse_(1.0 / double(2 * b)) {}
+  uint8_t operator()(int64_t a) const {
+    const int64_t num = 2 * a + b_, den = 2 * b_;
+    int64_t q = static_cast<int64_t>(std::clamp(std::floor(double(num) * inverse_), -1.0, 256.0));
+    if (q < 256 && (q + 1) * den <= num) {
+      ++q;
+    } else if (q > -1 && q * den > num) {
+      --q;
+    }
+    return Clamp255(q);
   }
-  return Clamp255(q);
-}
+
+ private:
+  int64_t b_;
+  double inverse_;
+};
 
 // Arithmetic shift right until every component is below 2^kAxisBits in magnitude.
 void Shrink(int64_t v[3]) {
@@ -118,9 +127,10 @@ BlockFit FitWeights(const Rgb8* colors, const uint32_t* norms, uint32_t length, 
   const int64_t det = s00 * s11 - s01 * s01;
   if (det <= 0 || best.sse == 0) return best;
   uint8_t a[3], b[3];
+  const RoundDivider divide(det);
   for (int k = 0; k < 3; ++k) {
-    a[k] = RoundDivTo255(m * (s11 * r0[k] - s01 * r1[k]), det);
-    b[k] = RoundDivTo255(m * (s00 * r1[k] - s01 * r0[k]), det);
+    a[k] = divide(m * (s11 * r0[k] - s01 * r1[k]));
+    b[k] = divide(m * (s00 * r1[k] - s01 * r0[k]));
   }
   const Endpoints refined{{a[0], a[1], a[2]}, {b[0], b[1], b[2]}};
   if (refined == best.ends) return best;
@@ -186,7 +196,8 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     // One color for the whole block: the mean, whose error follows from the sums alone:
     // sum over colors of (c - a)^T Q (c - a) = sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k).
     int64_t a[3];
-    for (int k = 0; k < 3; ++k) a[k] = RoundDivTo255(sums.s[k], n);  // a mean of 0..255: never clamped
+    const RoundDivider divide(n);
+    for (int k = 0; k < 3; ++k) a[k] = divide(sums.s[k]);  // a mean of 0..255: never clamped
     int64_t sse = 0;
     for (int j = 0; j < 3; ++j) {
       for (int k = 0; k < 3; ++k) {
@@ -229,7 +240,8 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
   const int64_t centre = sums.s[0] * qa[0] + sums.s[1] * qa[1] + sums.s[2] * qa[2];
   const int64_t lo = std::min<int64_t>(0, n * lowest - centre), hi = std::max<int64_t>(0, n * highest - centre);
   const int64_t axis2 = axis[0] * qa[0] + axis[1] * qa[1] + axis[2] * qa[2];
-  const auto along = [&](int64_t t, int k) { return RoundDivTo255(sums.s[k] * axis2 + t * axis[k], n * axis2); };
+  const RoundDivider divide(n * axis2);
+  const auto along = [&](int64_t t, int k) { return divide(sums.s[k] * axis2 + t * axis[k]); };
   const Endpoints ends{{along(lo, 0), along(lo, 1), along(lo, 2)}, {along(hi, 0), along(hi, 1), along(hi, 2)}};
 
   const uint32_t* norms = norms_.data() + begin;
