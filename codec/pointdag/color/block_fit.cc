@@ -142,28 +142,6 @@ BlockFit FitWeights(const Rgb8* colors, const uint32_t* norms, uint32_t length, 
   return best;
 }
 
-// Below the smallest eigenvalue of kErrorWeights (139.4): BlockError >= this x the RGB squared error.
-constexpr double kErrorFloor = 136.0;
-
-// Whether no fit with any bits can reach `give_up_above` (a BlockError sum, so at least kErrorFloor
-// times the RGB squared error bounded here), known from the covariance alone. Every
-// rebuilt color lies within sqrt(3)/2 of the segment A-B (Interpolate rounds each channel to within
-// 1/2), so with D the colors' squared distance to that line, sse >= D - sqrt(3 n D) once D >= 3n/4; and D is at
-// least the scatter off the principal axis, lambda2 + lambda3 = s, which the characteristic
-// polynomial bounds: e2 <= lambda1 s + s^2 / 4 = (e1 - s) s + s^2 / 4 gives s >= 2/3 (e1 - sqrt(e1^2 - 3 e2)).
-// Only ever rejects fits that would fail, so results do not depend on it.
-bool CannotReach(const int64_t cov[3][3], int64_t n, uint64_t give_up_above) {
-  const double m[3][3] = {{double(cov[0][0]), double(cov[0][1]), double(cov[0][2])},
-                          {double(cov[1][0]), double(cov[1][1]), double(cov[1][2])},
-                          {double(cov[2][0]), double(cov[2][1]), double(cov[2][2])}};
-  const double e1 = m[0][0] + m[1][1] + m[2][2];
-  const double e2 = m[0][0] * m[1][1] - m[0][1] * m[0][1] + m[0][0] * m[2][2] - m[0][2] * m[0][2] + m[1][1] * m[2][2] - m[1][2] * m[1][2];
-  const double s = 2.0 / 3.0 * (e1 - std::sqrt(std::max(0.0, e1 * e1 - 3 * e2))) - 1e-6 * e1;  // margin for rounding
-  const double scatter = s / double(n);  // cov is n times the scatter matrix
-  if (scatter < 0.75 * double(n)) return false;
-  return kErrorFloor * (scatter - std::sqrt(3.0 * double(n) * scatter)) > double(give_up_above);
-}
-
 }  // namespace
 
 BlockFitter::BlockFitter(std::span<const Rgb8> colors) : colors_(colors), prefix_(colors.size() + 1), norms_(colors.size()) {
@@ -207,7 +185,6 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
     return {{c, c}, static_cast<uint64_t>(sse)};
   }
-  if (give_up_above != UINT64_MAX && CannotReach(cov, n, give_up_above)) return {{}, give_up_above + 1};
   // Principal axis in BlockError's metric (that of the colors' covariance with Q: v <- C Q v, the
   // RGB image of the principal axis of L^T C L, Q = L L^T) by power iteration, starting from the
   // widest channel's column. Q v is shrunk too, so that C (Q v) stays below 2^57.
