@@ -104,25 +104,25 @@ class Rebuilder {
 
 // Weights and error for `ends`, then endpoints refined by least squares for those weights
 // (with u = m - w, t = w: minimise sum(u A + t B - m c)^2 per channel); the better fit wins.
-// The least-squares sums come from a count per weight and sum(w c) (below 2^26): sum(u c) = m sum(c) - sum(w c).
+// The least-squares sums come from sum(w), sum(w^2) and sum(w c) (below 2^26): with n colors,
+// sum(u t) = m sum(w) - sum(w^2), sum(u^2) = m^2 n - 2 m sum(w) + sum(w^2), sum(u c) = m sum(c) - sum(w c).
 template <int kBits>
 BlockFit FitWeights(const Rgb8* colors, const uint32_t* norms, uint32_t length, const int64_t sums[3], const Endpoints& ends,
                     uint64_t give_up_above) {
   constexpr int64_t m = Rebuilder<kBits>::kM;
   BlockFit best{ends, 0};
   const Rebuilder<kBits> first(ends);
-  uint32_t count[m + 1] = {};
-  int32_t wc[3] = {0, 0, 0};
+  int32_t sum_w = 0, sum_ww = 0, wc[3] = {0, 0, 0};
   const uint64_t hopeless = give_up_above <= UINT64_MAX / kHopeless ? kHopeless * give_up_above : UINT64_MAX;
   for (uint32_t i = 0; i < length; ++i) {
     if (best.sse > hopeless) return {ends, give_up_above + 1};
     const uint32_t w = first.Weight(colors[i]);
     best.sse += first.Error(colors[i], norms[i], w);
-    ++count[w];
+    sum_w += static_cast<int32_t>(w), sum_ww += static_cast<int32_t>(w * w);
     wc[0] += static_cast<int32_t>(w) * colors[i].r, wc[1] += static_cast<int32_t>(w) * colors[i].g, wc[2] += static_cast<int32_t>(w) * colors[i].b;
   }
-  int64_t s00 = 0, s01 = 0, s11 = 0, r0[3], r1[3];
-  for (int64_t w = 0; w <= m; ++w) s00 += count[w] * (m - w) * (m - w), s01 += count[w] * (m - w) * w, s11 += count[w] * w * w;
+  const int64_t s11 = sum_ww, s01 = m * sum_w - sum_ww, s00 = m * m * int64_t{length} - 2 * m * sum_w + sum_ww;
+  int64_t r0[3], r1[3];
   for (int k = 0; k < 3; ++k) r1[k] = wc[k], r0[k] = m * sums[k] - wc[k];
   const int64_t det = s00 * s11 - s01 * s01;
   if (det <= 0 || best.sse == 0) return best;
