@@ -101,7 +101,7 @@ struct Fit {
 
 // BlockFitter::Fit and FitWeights for colors [begin, begin + length) of macro block m. Written with
 // vector components, not indexed arrays: lavapipe (Mesa 22.3) miscompiles dynamically indexed
-// private arrays. At most 3 x length + 8 loop iterations.
+// private arrays. At most 3 x length + 2 loop iterations.
 Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) {
   const int64_t n = int64_t(length);
   const uint base = m * (kMacro + 1u) * 9u;
@@ -133,7 +133,7 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   // Principal axis in BlockError's metric: v <- C (Q v), Q v shrunk too.
   i64vec3 axis = widest == 0 ? c0 : (widest == 1 ? c1 : c2);
   Shrink(axis);
-  for (int iter = 0; iter < 8; ++iter) {
+  for (int iter = 0; iter < 2; ++iter) {  // kPowerIterations
     i64vec3 qa = WeightedAxis64(axis);
     Shrink(qa);
     // cov * qa, cov symmetric: row j = column j. (Not dot(): GLSL's dot() is floating point.)
@@ -165,7 +165,10 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   const int len2 = d.x * q.x + d.y * q.y + d.z * q.z;
   int64_t s00 = 0, s01 = 0, s11 = 0;
   i64vec3 r0 = i64vec3(0), r1 = i64vec3(0);
+  // kHopeless = 2: give up once the unrefined error passes twice the limit.
+  const uint64_t hopeless = give_up_above <= (0xFFFFFFFFFFFFFFFFul >> 1) ? 2ul * give_up_above : 0xFFFFFFFFFFFFFFFFul;
   for (uint i = 0; i < length; ++i) {
+    if (best.sse > hopeless) return Fit(best.a, best.b, give_up_above + 1ul);
     const ivec3 c = Unpack(colors[first + i]);
     const uint w = WeightOf(c, a, q, len2, mx);
     best.sse += uint64_t(ErrorOf(c, a, b, w, uint(mx)));

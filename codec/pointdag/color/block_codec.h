@@ -9,7 +9,8 @@
 // pass walks the blocks and merges each with its right neighbour where the merged block stays within
 // the threshold; a block merges at most once per pass; passes repeat until one merges nothing.
 // Variable rate (IIB): the same merging with 0 bits per weight gives the tree's leaves; merging
-// those with 1 bit gives their parents, and so on up to 4 bits. The tree is then cut bottom-up,
+// those with 2 bits gives their parents, and so on up to 4 bits (the 1-bit level keeps the leaves
+// unmerged: block_codec.cc, kFirstMergedBits). The tree is then cut bottom-up,
 // keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
 // threshold, so every cut does. All of it is integer arithmetic, so that the Vulkan port
 // (gpu/shaders/block_*.comp) returns the same blocks.

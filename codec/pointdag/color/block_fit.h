@@ -3,8 +3,9 @@
 //
 // A block of n colors with b bits per weight stores endpoints A and B; color i is rebuilt as
 // A + (B - A) * w_i / (2^b - 1), rounded per channel. With b = 0 every color is A.
-// BlockFitter::Fit() finds A and B along the colors' principal axis, picks each weight by
-// projection, then refines A and B by least squares for those weights (keeping the better fit).
+// BlockFitter::Fit() finds A and B along the colors' principal axis (two power-iteration steps), picks
+// each weight by projection, then refines A and B by least squares for those weights (keeping the
+// better fit).
 //
 // Every step is integer arithmetic with a fixed order of operations, so that the Vulkan port
 // (gpu/shaders/block_common.glsl) can reproduce it bit for bit: keep the two in step.
@@ -41,7 +42,8 @@ class BlockFitter {
 
   // Colors [begin, begin + length) with `bits` per weight. `give_up_above`: a fit whose error is
   // known to exceed it may stop early and report any error above it (the merge encoder only needs
-  // to know that a candidate fails its threshold).
+  // to know that a candidate fails its threshold); so does one whose first, unrefined error passes
+  // twice it, refinement untried (a heuristic: results depend on it, and the Vulkan port does alike).
   BlockFit Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above = UINT64_MAX) const;
 
  private:
@@ -53,6 +55,7 @@ class BlockFitter {
 
   std::span<const Rgb8> colors_;
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
+  std::vector<uint32_t> norms_;                   // c^T Q c per color (BlockError against black)
 };
 
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {

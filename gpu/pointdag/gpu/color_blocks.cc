@@ -18,6 +18,7 @@ namespace {
 
 constexpr uint32_t kMacroBlockColors = 16384;  // as codec/pointdag/color/block_codec.h
 constexpr uint32_t kLevels = 5;
+constexpr uint32_t kFirstMergedBits = 2;  // as block_codec.cc: the levels below keep the leaves
 constexpr uint32_t kPassesPerSubmit = 4;       // merge passes recorded per submission
 constexpr uint32_t kFixedRateBits = 3;
 
@@ -117,7 +118,11 @@ StatusOr<std::vector<DeviceColorBlock>> EncodeColorBlocks(VulkanContext& vulkan,
   std::vector<Dispatch> finish;
   if (!fixed_rate) {
     for (uint32_t level = 1; level < kLevels; ++level) {
-      RETURN_IF_ERROR(MergeLevel(vulkan, encoder, merges, level, level, {encoder.PerBlock(kRefit, level, level)}));
+      if (level < kFirstMergedBits) {
+        RETURN_IF_ERROR(vulkan.Run(std::vector<Dispatch>{encoder.PerBlock(kRefit, level, level)}));
+      } else {
+        RETURN_IF_ERROR(MergeLevel(vulkan, encoder, merges, level, level, {encoder.PerBlock(kRefit, level, level)}));
+      }
     }
     for (uint32_t level = 0; level < kLevels; ++level) finish.push_back(encoder.PerMacro(kCut, level));
     for (uint32_t level = kLevels - 1; level > 0; --level) finish.push_back(encoder.PerMacro(kOpen, level));
