@@ -11,31 +11,6 @@
 namespace pointdag {
 namespace {
 
-// A block's `length` weights of kBits each (kBits a constant, so the bit tree unrolls), appended
-// LSB-first to `words` at `bit_pos`; `words` already holds room for them, zeroed. The word being
-// filled stays in a register: stores to it could otherwise alias the range decoder's position.
-template <int kBits>
-void DecodeWeights(BinaryRangeDecoder& rc, std::array<BitTreeModel<kMaxWeightBits>, 17>& models, uint32_t length,
-                   uint64_t* words, uint64_t& bit_pos) {
-  uint64_t word = bit_pos >> 6;
-  unsigned shift = bit_pos & 63;
-  uint64_t acc = words[word];
-  uint32_t prev = 16;
-  for (uint32_t i = 0; i < length; ++i) {
-    const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models[prev], kBits);
-    acc |= uint64_t{w} << shift;
-    shift += kBits;
-    if (shift >= 64) {
-      words[word++] = acc;
-      shift -= 64;
-      acc = uint64_t{w} >> (kBits - shift);  // the bits that did not fit (none when shift is 0)
-    }
-    prev = w;
-  }
-  words[word] = acc;
-  bit_pos += uint64_t{length} * kBits;
-}
-
 uint32_t PackedWeight(const uint64_t* words, uint64_t bit_offset, int bits) {
   const uint64_t word = bit_offset >> 6;
   const unsigned shift = bit_offset & 63;
@@ -111,12 +86,13 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     d.bits_.push_back(static_cast<uint8_t>(bits));
     d.ends_.push_back(ends);
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
-    switch (bits) {
-      case 1: DecodeWeights<1>(rc, models->weight[1], length, d.weights_.data(), weight_bits); break;
-      case 2: DecodeWeights<2>(rc, models->weight[2], length, d.weights_.data(), weight_bits); break;
-      case 3: DecodeWeights<3>(rc, models->weight[3], length, d.weights_.data(), weight_bits); break;
-      case 4: DecodeWeights<4>(rc, models->weight[4], length, d.weights_.data(), weight_bits); break;
-      default: break;
+    uint32_t prev_w = 16;
+    for (uint32_t i = 0; bits && i < length; ++i) {
+      const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][prev_w], bits);
+      d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);
+      if ((weight_bits & 63) + static_cast<uint64_t>(bits) > 64) d.weights_[(weight_bits >> 6) + 1] |= uint64_t{w} >> (64 - (weight_bits & 63));
+      weight_bits += static_cast<uint64_t>(bits);
+      prev_w = w;
     }
     if (rc.overrun()) return Truncated("color stream is cut short");
     next += length;
