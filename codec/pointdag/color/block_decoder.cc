@@ -85,8 +85,8 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     d.weight_offsets_.push_back(weight_bits);
     d.bits_.push_back(static_cast<uint8_t>(bits));
     d.ends_.push_back(ends);
-    if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     uint32_t prev_w = 16;
+    if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     for (uint32_t i = 0; bits && i < length; ++i) {
       const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][prev_w], bits);
       d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);

@@ -83,7 +83,7 @@ std::vector<uint64_t> MipVoxelIndices(std::span<const uint64_t> morton, int dept
 
 StatusOr<std::vector<Rgb8>> MipVoxelColors(std::span<const uint64_t> morton, int depth, std::span<const Rgb8> mip_colors) {
   if (morton.empty()) return std::vector<Rgb8>{};
-  if (mip_colors.empty()) return Corrupt("mipmap colors are missing for the voxels");
+  if (mip_colors.empty()) return Corrupt(".pdag mipmap counts disagree with its voxels");
   std::vector<Rgb8> colors(morton.size());
   const uint64_t last = mip_colors.size() - 1;
   uint64_t top = 0;  // the indices increase: the last voxel's is the largest
@@ -91,7 +91,7 @@ StatusOr<std::vector<Rgb8>> MipVoxelColors(std::span<const uint64_t> morton, int
     colors[i] = mip_colors[std::min(n, last)];
     top = n;
   });
-  if (top > last) return Corrupt("mipmap counts disagree with the voxels");
+  if (top > last) return Corrupt(".pdag mipmap counts disagree with its voxels");
   return colors;
 }
 
