@@ -44,10 +44,7 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limit
   if (!file.colors.empty()) {
     if (out.dag.mode == CountMode::kMipmap) {
       ASSIGN_OR_RETURN(out.mip_colors, DecodeColors(file.colors, root_count));
-      for (uint64_t i : MipVoxelIndices(out.grid.morton, out.grid.depth)) {
-        if (i >= out.mip_colors.size()) return Corrupt(".pdag mipmap counts disagree with its voxels");
-        out.grid.colors.push_back(out.mip_colors[i]);
-      }
+      ASSIGN_OR_RETURN(out.grid.colors, MipVoxelColors(out.grid.morton, out.grid.depth, out.mip_colors));
     } else {
       ASSIGN_OR_RETURN(out.grid.colors, DecodeColors(file.colors, voxels, out.grid.morton));
     }

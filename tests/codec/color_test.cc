@@ -427,6 +427,9 @@ TEST(MipColors, EveryNodeIsTheMeanOfItsChildrenAtItsDagIndex) {
   ASSERT_EQ(m.colors.size(), dag.RootCount());
   ASSERT_EQ(m.voxel_index.size(), codes.size());
   EXPECT_EQ(MipVoxelIndices(codes, depth), m.voxel_index);
+  EXPECT_EQ(MipVoxelColors(codes, depth, m.colors).value(), colors);  // the decoder's gather
+  const std::span<const Rgb8> short_mip(m.colors.data(), m.voxel_index.back());
+  EXPECT_EQ(MipVoxelColors(codes, depth, short_mip).status().code(), StatusCode::kCorrupt);
   for (size_t i = 0; i < codes.size(); ++i) {
     const auto c = MortonDecode(codes[i]);
     ASSERT_EQ(dag.MipColorIndex(c[0], c[1], c[2], depth), std::optional<uint64_t>(m.voxel_index[i]));

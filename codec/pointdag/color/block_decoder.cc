@@ -9,6 +9,24 @@
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
+namespace {
+
+uint32_t PackedWeight(const uint64_t* words, uint64_t bit_offset, int bits) {
+  const uint64_t word = bit_offset >> 6;
+  const unsigned shift = bit_offset & 63;
+  uint64_t v = words[word] >> shift;
+  if (shift + static_cast<unsigned>(bits) > 64) v |= words[word + 1] << (64 - shift);
+  return static_cast<uint32_t>(v & ((1u << bits) - 1));
+}
+
+// `n` colors of one block from its weights at `bit_offset`, kBits a constant so that Interpolate
+// divides by a constant (a multiply) and the weight reads need no variable masks.
+template <int kBits>
+void DecodeRun(const Endpoints& ends, const uint64_t* words, uint64_t bit_offset, uint64_t n, Rgb8* out) {
+  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = Interpolate(ends, PackedWeight(words, bit_offset, kBits), kBits);
+}
+
+}  // namespace
 
 StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count) {
   if (stored.size() < 4) return Truncated("color stream is shorter than its header");
@@ -40,6 +58,11 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   int prev_bits = 0;
   Rgb8 prev_a{};
   d.weights_.assign(2, 0);  // grows with the weights really decoded, plus one word of padding
+  // Bounded by `count`, which the caller knows: its colors take more than these.
+  d.starts_.reserve(blocks);
+  d.weight_offsets_.reserve(blocks);
+  d.bits_.reserve(blocks);
+  d.ends_.reserve(blocks);
   for (uint64_t k = 0; k < blocks; ++k) {
     const uint32_t length = DecodeGamma(rc, models->length[prev_bits], kLengthBits);
     const int bits = layout == BlockLayout::kVariableRate ? static_cast<int>(DecodeBitTree<3>(rc, models->width[prev_bits]))
@@ -87,13 +110,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   return d;
 }
 
-uint32_t BlockColorDecoder::Weight(uint64_t bit_offset, int bits) const {
-  const uint64_t word = bit_offset >> 6;
-  const unsigned shift = bit_offset & 63;
-  uint64_t v = weights_[word] >> shift;
-  if (shift + static_cast<unsigned>(bits) > 64) v |= weights_[word + 1] << (64 - shift);
-  return static_cast<uint32_t>(v & ((1u << bits) - 1));
-}
+uint32_t BlockColorDecoder::Weight(uint64_t bit_offset, int bits) const { return PackedWeight(weights_.data(), bit_offset, bits); }
 
 Rgb8 BlockColorDecoder::FromBlock(size_t block, uint64_t index) const {
   const int bits = bits_[block];
@@ -112,9 +129,20 @@ Rgb8 BlockColorDecoder::At(uint64_t index) const {
 void BlockColorDecoder::Decode(uint64_t begin, uint64_t end, Rgb8* out) const {
   if (begin >= end) return;
   size_t block = static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), static_cast<uint32_t>(begin)) - starts_.begin()) - 1;
-  for (uint64_t i = begin; i < end; ++i) {
-    while (block + 1 < starts_.size() && starts_[block + 1] <= i) ++block;
-    *out++ = FromBlock(block, i);
+  // Block by block: the width is dispatched once per block, not once per color.
+  for (uint64_t i = begin; i < end; ++block) {
+    const uint64_t stop = block + 1 < starts_.size() ? std::min<uint64_t>(end, starts_[block + 1]) : end;
+    const uint64_t n = stop - i;
+    const uint64_t offset = weight_offsets_[block] + (i - starts_[block]) * bits_[block];
+    switch (bits_[block]) {
+      case 1: DecodeRun<1>(ends_[block], weights_.data(), offset, n, out); break;
+      case 2: DecodeRun<2>(ends_[block], weights_.data(), offset, n, out); break;
+      case 3: DecodeRun<3>(ends_[block], weights_.data(), offset, n, out); break;
+      case 4: DecodeRun<4>(ends_[block], weights_.data(), offset, n, out); break;
+      default: std::fill(out, out + n, ends_[block].a); break;
+    }
+    out += n;
+    i = stop;
   }
 }
 

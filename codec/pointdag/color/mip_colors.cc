@@ -1,5 +1,6 @@
 #include "pointdag/color/mip_colors.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -24,6 +25,20 @@ void ForEachPreorderNode(std::span<const uint64_t> morton, int depth, Visit&& vi
       visit(level, level == 0 ? kNoParent : last_at_level[level - 1]);
       last_at_level[level] = next++;
     }
+  }
+}
+
+// Calls visit(i, pre-order index of voxel i) for every voxel in order. Voxel i opens the nodes of
+// the levels below its deepest common ancestor with voxel i-1, itself last, so the pre-order count
+// jumps by the number of those levels: no walk over the nodes (the decoder's hot path).
+template <typename Visit>
+void ForEachVoxelPreorderIndex(std::span<const uint64_t> morton, int depth, Visit&& visit) {
+  uint64_t n = 0;  // nodes opened so far
+  for (size_t i = 0; i < morton.size(); ++i) {
+    int first_new = 0;
+    if (i > 0) first_new = depth - (63 - __builtin_clzll(morton[i] ^ morton[i - 1])) / 3;
+    n += static_cast<uint64_t>(depth - first_new + 1);
+    visit(i, n - 1);
   }
 }
 
@@ -61,13 +76,23 @@ MipColors BuildMipColors(std::span<const uint64_t> morton, std::span<const Rgb8>
 }
 
 std::vector<uint64_t> MipVoxelIndices(std::span<const uint64_t> morton, int depth) {
-  std::vector<uint64_t> index;
-  uint64_t n = 0;
-  ForEachPreorderNode(morton, depth, [&](int level, uint32_t) {
-    if (level == depth) index.push_back(n);
-    ++n;
-  });
+  std::vector<uint64_t> index(morton.size());
+  ForEachVoxelPreorderIndex(morton, depth, [&](size_t i, uint64_t n) { index[i] = n; });
   return index;
+}
+
+StatusOr<std::vector<Rgb8>> MipVoxelColors(std::span<const uint64_t> morton, int depth, std::span<const Rgb8> mip_colors) {
+  if (morton.empty()) return std::vector<Rgb8>{};
+  if (mip_colors.empty()) return Corrupt(".pdag mipmap counts disagree with its voxels");
+  std::vector<Rgb8> colors(morton.size());
+  const uint64_t last = mip_colors.size() - 1;
+  uint64_t top = 0;  // the indices increase: the last voxel's is the largest
+  ForEachVoxelPreorderIndex(morton, depth, [&](size_t i, uint64_t n) {
+    colors[i] = mip_colors[std::min(n, last)];
+    top = n;
+  });
+  if (top > last) return Corrupt(".pdag mipmap counts disagree with its voxels");
+  return colors;
 }
 
 }  // namespace pointdag

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "pointdag/status.h"
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag {
@@ -23,5 +24,9 @@ MipColors BuildMipColors(std::span<const uint64_t> morton, std::span<const Rgb8>
 
 // Just the pre-order index of each voxel (to read voxel colors out of decoded mip colors).
 std::vector<uint64_t> MipVoxelIndices(std::span<const uint64_t> morton, int depth);
+
+// The voxels' own colors out of decoded mip colors (MipVoxelIndices without the index array).
+// Corrupt when a voxel's index falls outside `mip_colors` (hostile counts).
+StatusOr<std::vector<Rgb8>> MipVoxelColors(std::span<const uint64_t> morton, int depth, std::span<const Rgb8> mip_colors);
 
 }  // namespace pointdag
