@@ -4,7 +4,6 @@
 #include <array>
 #include <bit>
 #include <memory>
-#include <unordered_map>
 
 #include "pointdag/dag/mask_mixer.h"
 #include "pointdag/entropy/adaptive_codes.h"
@@ -398,18 +397,23 @@ StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, c
   std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
   DecoderIo io(payload);
   RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version));
-  // Equal bricks become one, numbered in the order first seen: the canonical order.
-  std::unordered_map<uint64_t, uint32_t> index;
-  index.reserve(counts[levels]);
+  // Equal bricks become one, numbered in the order first seen: the canonical order. An open-addressed
+  // table of leaf ordinals (at most half full: sized by the bricks decoded, never above the header's
+  // count) rather than a node-based map.
+  const int bits = static_cast<int>(std::bit_width(std::min<uint64_t>(counts[levels], slots.size()))) + 1;
+  std::vector<uint32_t> table(size_t{1} << bits, UINT32_MAX);
+  a.leaves.reserve(counts[levels]);
   std::vector<uint32_t> ids;
   ids.reserve(slots.size());
   for (uint64_t brick : slots) {
-    const auto [it, added] = index.try_emplace(brick, static_cast<uint32_t>(a.leaves.size()));
-    if (added) {
+    size_t at = static_cast<size_t>(((brick ^ (brick >> 29)) * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+    while (table[at] != UINT32_MAX && a.leaves[table[at]] != brick) at = (at + 1) & (table.size() - 1);
+    if (table[at] == UINT32_MAX) {
       if (a.leaves.size() == counts[levels]) return Corrupt("geometry stream holds more bricks than its header declares");
+      table[at] = static_cast<uint32_t>(a.leaves.size());
       a.leaves.push_back(brick);
     }
-    ids.push_back(it->second);
+    ids.push_back(table[at]);
   }
   if (a.leaves.size() != counts[levels]) return Corrupt("geometry stream holds fewer bricks than its header declares");
   if (levels > 0) a.children.back() = std::move(ids);
