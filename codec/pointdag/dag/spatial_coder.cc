@@ -223,6 +223,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
   const unsigned most = edges ? 1 : 3;
   unsigned m = 0;
   unsigned ones = 0;  // set bits so far, at most `most`
+#pragma GCC unroll 8  // constant c: its table rows and shifts fold into the code
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
