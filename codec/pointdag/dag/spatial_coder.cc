@@ -267,6 +267,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
     // Per side, the cell whose children lie there (outside: the neighbour; mask 0 unless expanded).
     std::array<int32_t, 6> side_base;
     std::array<unsigned, 6> side_mask;
+#pragma GCC unroll 6
     for (int d = 0; d < 6; ++d) {
       const int32_t owner = cur.nbr[i][d];
       const bool expanded = owner >= 0 && base[owner] >= 0;
@@ -290,6 +291,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
       }
       ++r;
       auto& n = next.nbr[j];
+#pragma GCC unroll 6  // constant d: its axis bit and side fold into the code
       for (int d = 0; d < 6; ++d) {
         const int bit = 4 >> (d / 2);
         const bool inside = (d & 1) ? !(c & bit) : (c & bit);
