@@ -38,6 +38,13 @@ constexpr auto kStretch = [] {
   return t;
 }();
 
+// Squash on every d of −2047..2047 (index d + 2047), clamped to 1..4095: the mixer's per-bit lookup.
+constexpr auto kSquashTable = [] {
+  std::array<int16_t, 4095> t{};
+  for (int32_t d = -2047; d <= 2047; ++d) t[d + 2047] = static_cast<int16_t>(std::clamp(Squash(d), 1, 4095));
+  return t;
+}();
+
 // A probability given outright (the mixer's), for the range coder's Encode/Decode.
 struct FixedP0 {
   uint32_t p0;
@@ -54,16 +61,19 @@ class MaskMixer {
   template <typename Io>
   int Bit(Io& io, YoungBitModel& context, int c, unsigned so_far, unsigned parent, unsigned lower, bool ones, int truth) {
     YoungBitModel& tree = tree_[(1u << c) | so_far];
-    YoungBitModel& par = parent_[(c * 256 + parent) * 8 + lower];
-    auto& w = weights_[c * 2 + (ones ? 1 : 0)];
-    const std::array<int32_t, 4> s = {Stretch(context), Stretch(tree), Stretch(par), kBias};
-    int64_t dot = 0;
-    for (int k = 0; k < 4; ++k) dot += int64_t{w[k]} * s[k];
-    const int32_t p1 = std::clamp(Squash(static_cast<int32_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047))), 1, 4095);
+    YoungBitModel& par = parent_[(parent * 8 + c) * 8 + lower];  // a node's rows together: fewer cache lines
+    std::array<int32_t, 4>& w = weights_[c * 2 + (ones ? 1 : 0)];
+    // Spelled out rather than looped: the loops stayed loops, through the stack, on the per-bit path.
+    const int32_t s0 = Stretch(context), s1 = Stretch(tree), s2 = Stretch(par);
+    const int64_t dot = int64_t{w[0]} * s0 + int64_t{w[1]} * s1 + int64_t{w[2]} * s2 + int64_t{w[3]} * kBias;
+    const int32_t p1 = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
     FixedP0 mixed{static_cast<uint32_t>(4096 - p1)};
     const int bit = io.Bit(mixed, truth);
     const int32_t err = (bit << 12) - p1;
-    for (int k = 0; k < 4; ++k) w[k] = std::clamp(w[k] + ((s[k] * err) >> 11), -kMaxWeight, kMaxWeight);
+    w[0] = Train(w[0], s0, err);
+    w[1] = Train(w[1], s1, err);
+    w[2] = Train(w[2], s2, err);
+    w[3] = Train(w[3], kBias, err);
     context.Update(bit);
     tree.Update(bit);
     par.Update(bit);
@@ -76,6 +86,7 @@ class MaskMixer {
   // The neighbour model starts trusted alone at 1, the other two at 0.3.
   static constexpr std::array<int32_t, 4> kInitialWeights = {65536, 19661, 19661, 0};
   static int32_t Stretch(const YoungBitModel& m) { return kStretch[4096 - m.P0()]; }
+  static int32_t Train(int32_t w, int32_t s, int32_t err) { return std::clamp(w + ((s * err) >> 11), -kMaxWeight, kMaxWeight); }
 
   std::array<YoungBitModel, 256> tree_{};
   std::array<YoungBitModel, 8 * 256 * 8> parent_{};

@@ -4,7 +4,6 @@
 #include <array>
 #include <bit>
 #include <memory>
-#include <unordered_map>
 
 #include "pointdag/dag/mask_mixer.h"
 #include "pointdag/entropy/adaptive_codes.h"
@@ -175,7 +174,11 @@ Around Surroundings(const Level& lv, size_t i) {
     return e >= 0 ? e : other;
   };
   std::array<std::array<int32_t, 2>, 2> xy, xz, yz;  // [side][side], 0 = −, 1 = +
+  // Unrolled in full (here and below) so that every index is a constant and the arrays live in
+  // registers: as loops they went through the stack, a fifth of the decode.
+#pragma GCC unroll 2
   for (int a = 0; a < 2; ++a) {
+#pragma GCC unroll 2
     for (int b = 0; b < 2; ++b) {
       xy[a][b] = edge(a, 2 + b);
       xz[a][b] = edge(a, 4 + b);
@@ -184,6 +187,7 @@ Around Surroundings(const Level& lv, size_t i) {
   }
   Around out;
   int32_t lower_corner = -1;
+#pragma GCC unroll 8
   for (int c = 0; c < 8; ++c) {
     const int x = (c >> 2) & 1, y = (c >> 1) & 1, z = c & 1;
     const int32_t c1 = step(xy[x][y], 4 + z), c2 = step(xz[x][z], 2 + y), c3 = step(yz[y][z], x);
@@ -219,6 +223,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
   const unsigned most = edges ? 1 : 3;
   unsigned m = 0;
   unsigned ones = 0;  // set bits so far, at most `most`
+#pragma GCC unroll 8  // constant c: its table rows and shifts fold into the code
   for (int c = 0; c < 8; ++c) {
     int bit = 1;
     if (c < 7 || m != 0) {
@@ -262,6 +267,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
     // Per side, the cell whose children lie there (outside: the neighbour; mask 0 unless expanded).
     std::array<int32_t, 6> side_base;
     std::array<unsigned, 6> side_mask;
+#pragma GCC unroll 6
     for (int d = 0; d < 6; ++d) {
       const int32_t owner = cur.nbr[i][d];
       const bool expanded = owner >= 0 && base[owner] >= 0;
@@ -285,6 +291,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a) {
       }
       ++r;
       auto& n = next.nbr[j];
+#pragma GCC unroll 6  // constant d: its axis bit and side fold into the code
       for (int d = 0; d < 6; ++d) {
         const int bit = 4 >> (d / 2);
         const bool inside = (d & 1) ? !(c & bit) : (c & bit);
@@ -398,18 +405,23 @@ StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, c
   std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
   DecoderIo io(payload);
   RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version));
-  // Equal bricks become one, numbered in the order first seen: the canonical order.
-  std::unordered_map<uint64_t, uint32_t> index;
-  index.reserve(counts[levels]);
+  // Equal bricks become one, numbered in the order first seen: the canonical order. An open-addressed
+  // table of leaf ordinals (at most half full: sized by the bricks decoded, never above the header's
+  // count) rather than a node-based map.
+  const int bits = static_cast<int>(std::bit_width(std::min<uint64_t>(counts[levels], slots.size()))) + 1;
+  std::vector<uint32_t> table(size_t{1} << bits, UINT32_MAX);
+  a.leaves.reserve(counts[levels]);
   std::vector<uint32_t> ids;
   ids.reserve(slots.size());
   for (uint64_t brick : slots) {
-    const auto [it, added] = index.try_emplace(brick, static_cast<uint32_t>(a.leaves.size()));
-    if (added) {
+    size_t at = static_cast<size_t>(((brick ^ (brick >> 29)) * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+    while (table[at] != UINT32_MAX && a.leaves[table[at]] != brick) at = (at + 1) & (table.size() - 1);
+    if (table[at] == UINT32_MAX) {
       if (a.leaves.size() == counts[levels]) return Corrupt("geometry stream holds more bricks than its header declares");
+      table[at] = static_cast<uint32_t>(a.leaves.size());
       a.leaves.push_back(brick);
     }
-    ids.push_back(it->second);
+    ids.push_back(table[at]);
   }
   if (a.leaves.size() != counts[levels]) return Corrupt("geometry stream holds fewer bricks than its header declares");
   if (levels > 0) a.children.back() = std::move(ids);
