@@ -30,7 +30,7 @@ nlohmann::json DescribeCrs(const ScanInfo& scan) {
 // The stages after the DAG: its stored form, the colors, the metadata.
 Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
   auto start = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder));
+  ASSIGN_OR_RETURN(out.file.geometry, EncodeDag(out.dag, options.geometry_coder, options.geometry_version));
   out.seconds.encode = SecondsSince(start);
 
   start = std::chrono::steady_clock::now();

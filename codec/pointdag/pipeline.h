@@ -26,6 +26,7 @@ struct EncodeOptions {
   std::optional<double> voxel_size;  // exactly one of voxel_size and depth
   std::optional<int> depth;
   GeometryCoder geometry_coder = GeometryCoder::kSpatial;
+  int geometry_version = kGeometryStreamVersion;  // of the spatial coder's stream (dag_stream.h)
   ColorEncodeOptions colors{ColorCodec::kLossless, std::nullopt};
   bool mipmap = false;  // DAG counts nodes and internal nodes get colors too (Paper IIB)
   uint64_t max_points_in_memory = uint64_t{1} << 25;  // above it, voxelize and build chunk by chunk

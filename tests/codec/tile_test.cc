@@ -62,6 +62,7 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
   const VoxelGrid finest = SurfaceGrid();
   TilingOptions options;
   options.colors = {ColorCodec::kVariableRate, 40.0};
+  EXPECT_EQ(options.geometry_version, 2);
   auto set = BuildTiles(finest, ScanInfo{}, "surface", options);
   ASSERT_TRUE(set.ok()) << set.status().ToString();
   EXPECT_EQ(set->levels, 3);
@@ -79,7 +80,10 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
       if (level > 0) {
         EXPECT_TRUE(keys.count({level - 1, t.key.x / 2, t.key.y / 2, t.key.z / 2})) << "orphan tile";
       }
-      auto decoded = DecodePdag(*ParsePdag(t.bytes));
+      const auto file = ParsePdag(t.bytes);
+      ASSERT_TRUE(file.ok() && !file->geometry.empty());
+      EXPECT_EQ(file->geometry[0], options.geometry_version) << "tiles take the faster-decoding geometry stream";
+      auto decoded = DecodePdag(*file);
       ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
       EXPECT_EQ(decoded->meta["tile"]["level"], level);
       EXPECT_EQ(decoded->meta["tile"]["x"], t.key.x);

@@ -80,6 +80,7 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
 
   EncodeOptions encode;
   encode.geometry_coder = options.geometry_coder;
+  encode.geometry_version = options.geometry_version;
   encode.colors = options.colors;
   encode.mipmap = true;
   set.tiles.resize(pending.size());
