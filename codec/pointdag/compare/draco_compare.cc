@@ -57,7 +57,9 @@ StatusOr<DracoResult> DracoEncodeVoxels(const VoxelGrid& grid, DracoSearch searc
   }
   if (best.bytes == 0) return Internal("Draco could not encode the voxels with any method");
 
-  for (int pass = 0; pass < 3; ++pass) {
+  // The daemon (kBestLevel) only needs the check, not the decode time's best of three.
+  const int passes = search == DracoSearch::kExhaustive ? 3 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
     draco::DecoderBuffer in;
     in.Init(best_buffer.data(), best_buffer.size());
     draco::Decoder decoder;
