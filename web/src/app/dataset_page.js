@@ -1,10 +1,12 @@
 // `/datasets/{id}` (kind 'pdag': our .pdag tiles, decoded in Web Workers) and
 // `/datasets/{id}/3dtiles` (kind '3dtiles': the 3D Tiles tileset drawn by 3d-tiles-renderer):
 // a full-window scene, a top bar, and the HUD. Both expose the test hooks of contract 5 as
-// window.pointdagViewer.
+// window.pointdagViewer. The .pdag page of a dataset with shadows has a "Shadows" toggle
+// (?shadows=1 starts with it on).
 import { h } from './dom.js';
 import { formatBytes, formatDracoRatio, formatFixed, formatInt, formatLength } from './format.js';
 import { Hud } from './hud.js';
+import { ShadowToggle } from './shadow_toggle.js';
 
 const HUD_MS = 250;
 
@@ -36,6 +38,7 @@ export class DatasetPage {
     this.hud = new Hud();
     this.title = h('span.title', {}, id);
     this.fitButton = h('button#fit', { type: 'button', disabled: true }, 'Fit');
+    this.tools = h('span.tools');
     this.message = h('p.error.fatal#viewer-error', { role: 'alert', hidden: true });
     const base = `/datasets/${encodeURIComponent(id)}`;
     const tab = (href, label, active) => h(active ? 'a.tab.active' : 'a.tab', { href }, label);
@@ -43,7 +46,7 @@ export class DatasetPage {
       h('header.top.overlay', {},
         h('h1', {}, h('a', { href: '/' }, 'pointdag')), this.title,
         h('nav', {}, tab(base, 'pdag tiles', kind === 'pdag'), tab(`${base}/3dtiles`, '3D Tiles', kind === '3dtiles')),
-        this.fitButton),
+        this.tools, this.fitButton),
       h('main.dataset', {}, this.viewport, this.hud.element, this.message));
   }
 
@@ -57,6 +60,7 @@ export class DatasetPage {
       this.hud.setMeta(metaRows(dataset));
       const viewer = new Viewer(new SceneView(this.viewport), this.api, dataset, this.params);
       window.pointdagViewer = { state: () => viewer.state(), projectedBounds: () => viewer.projectedBounds() };
+      if (dataset.shadows && viewer.setShadows) this.addShadowToggle(dataset.shadows, viewer);
       this.fitButton.addEventListener('click', () => viewer.fit());
       this.fitButton.disabled = false;
       setInterval(() => this.hud.setStats(viewer.statRows()), HUD_MS);
@@ -67,6 +71,13 @@ export class DatasetPage {
       console.error(err);
     }
     return this;
+  }
+
+  addShadowToggle(shadows, viewer) {
+    const toggle = new ShadowToggle(shadows, viewer.shadowAmbient, this.params.get('shadows') === '1', (on) => viewer.setShadows(on));
+    this.tools.append(toggle.element);
+    if (toggle.legend) this.viewport.after(toggle.legend.element);
+    window.pointdagViewer.shadowProbe = (limit) => viewer.shadowProbe(limit);
   }
 
   async viewerClass() {

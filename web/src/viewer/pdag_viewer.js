@@ -1,6 +1,7 @@
 // Streams a dataset's .pdag tiles (GET /v1/datasets/{id}/tiles/...) into a SceneView: hierarchy
 // pages on demand, tiles chosen per frame by LodSelector, fetched by TileLoader, decoded in a
-// DecoderPool of Web Workers, kept by TileCache within a budget of points.
+// DecoderPool of Web Workers, kept by TileCache within a budget of points. A dataset with shadows
+// can shade its points by their light (setShadows), from per-tile layers fetched once turned on.
 /* global POINTDAG_WORKER_URL, POINTDAG_WASM_URL */
 import { formatBytes, formatInt } from '../app/format.js';
 import { DecoderPool } from './decoder_pool.js';
@@ -8,6 +9,9 @@ import { LodSelector } from './lod_selector.js';
 import { PointMaterials } from './point_materials.js';
 import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
+import { ShadowLayers } from './shadow_layers.js';
+import { probeVoxelLight } from './shadow_probe.js';
+import { SHADOW_AMBIENT, ShadowShading } from './shadow_shading.js';
 import { statRows } from './stat_rows.js';
 import { TileCache } from './tile_cache.js';
 import { TileHierarchy } from './tile_hierarchy.js';
@@ -45,6 +49,8 @@ export class PdagViewer {
     this.hierarchy.onChange = () => view.requestRender();
     this.selector = new LodSelector(this.hierarchy, grid.finestLevel, numberParam(params, 'sse'));
     this.cache = new TileCache(view.scene, numberParam(params, 'budget'));
+    this.shadows = dataset.shadows
+      ? new ShadowLayers(api, dataset.id, new ShadowShading(), () => view.requestRender()) : null;
     const backend = params.get('decoder') || undefined;
     this.pool = new DecoderPool(WORKER_URL, numberParam(params, 'workers'), backend);
     this.loader = new TileLoader({
@@ -52,6 +58,7 @@ export class PdagViewer {
       materials: new PointMaterials(view.camera), frameOrigin: this.frameOrigin,
       maxInFlight: numberParam(params, 'inflight'),
       onLoaded: (node) => this.tileLoaded(node),
+      shadows: this.shadows,
     });
     this.frame = 0;
     this.drawn = [];
@@ -76,6 +83,17 @@ export class PdagViewer {
 
   fit() {
     this.view.fit(this.dataBox());
+  }
+
+  // The darkest shading (a voxel never lit): the toggle's legend shows it.
+  get shadowAmbient() {
+    return SHADOW_AMBIENT;
+  }
+
+  // Shading by the shadow layers on or off (a dataset without shadows has none to turn on).
+  setShadows(on) {
+    if (!this.shadows) return;
+    this.shadows.setEnabled(on, this.cache.tiles);
   }
 
   tileLoaded(node) {
@@ -122,7 +140,23 @@ export class PdagViewer {
       decoder: { backend: this.pool.backendUsed, tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
       errors: this.loader.failures,
       lastError: this.loader.lastError,
+      shadows: this.shadows && this.shadowState(),
     };
+  }
+
+  // Of the drawn tiles: how many are shaded, drawn without a layer, or waiting for theirs.
+  shadowState() {
+    const s = this.shadows;
+    const drawnAs = (what) => this.drawn.filter((n) => n.points?.userData.shadow === what).length;
+    return {
+      enabled: s.shading.enabled, tilesShaded: drawnAs('shaded'), tilesWithoutLayer: drawnAs('none'),
+      loading: s.loading, bytesFetched: s.bytes, missing: s.missing, errors: s.failures, lastError: s.lastError,
+    };
+  }
+
+  // Test hook: up to `limit` drawn voxels of shaded tiles, with the CSS pixel of their centre and their light.
+  shadowProbe(limit) {
+    return probeVoxelLight(this.drawn, this.view, limit);
   }
 
   projectedBounds() {
@@ -134,6 +168,7 @@ export class PdagViewer {
     return statRows(s, this.view.frameMs, `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles`, [
       ['Resident', `${formatInt(s.residentPoints)} / ${formatInt(s.budgetPoints)} points`],
       ['Decode', s.decoder.tiles ? `${(s.decoder.ms / s.decoder.tiles).toFixed(1)} ms/tile (${s.decoder.backend})` : '–'],
+      ...(s.shadows ? [['Shadows', s.shadows.enabled ? `${s.shadows.tilesShaded} of ${s.tilesOnScreen} tiles shaded` : 'off']] : []),
     ]);
   }
 }

@@ -1,11 +1,12 @@
 // Fetches and decodes the tiles a frame asks for: coarsest level first, then nearest, with at most
 // `maxInFlight` tiles between request and decoded points. Each frame replaces the queue, so what
-// left the view is never fetched.
+// left the view is never fetched. With shadows wanted, each tile's shadow layer is fetched beside it.
 import { buildTilePoints } from './tile_points.js';
 
 export class TileLoader {
-  constructor({ api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded }) {
-    Object.assign(this, { api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded });
+  // shadows: ShadowLayers, or null for a dataset without shadows.
+  constructor({ api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows = null }) {
+    Object.assign(this, { api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows });
     this.queue = [];
     this.inFlight = 0;
     this.inFlightPoints = 0;
@@ -40,6 +41,7 @@ export class TileLoader {
     node.state = 'loading';
     this.inFlight++;
     this.inFlightPoints += node.voxels;
+    const layer = this.shadows?.wanted ? this.shadows.fetch(node) : null; // never rejects
     try {
       const bytes = await this.api.bytes(`/v1/datasets/${encodeURIComponent(this.datasetId)}/tiles/${node.path()}`);
       this.bytes += bytes.byteLength;
@@ -48,6 +50,7 @@ export class TileLoader {
         throw new Error(`decoded ${decoded.count} voxels, the hierarchy says ${node.voxels}`);
       }
       this.cache.add(node, buildTilePoints(decoded, this.frameOrigin, this.materials));
+      this.shadows?.adopt(node, layer);
       this.loaded++;
     } catch (err) {
       node.unload('failed');
