@@ -1,7 +1,7 @@
 // A real pointdagd on loopback for the web and browser tests and the benchmarks (as
 // tests/server/daemon_util.cc starts one): a temporary --data-dir, port 0 with --port-file, ready
 // once /readyz answers; optionally a write token, the viewer's files (--web-dir) and --workers.
-// Also: upload a scan, wait for its job, and list and fetch every tile of a dataset.
+// Also: upload a scan, wait for its job, compute its shadows, and list and fetch every tile of a dataset.
 import { spawn } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -101,6 +101,26 @@ export async function ingest(baseUrl, scanPath, { name = 'scan', timeoutSeconds 
     if (job.status === 'done') return job.dataset_id;
     if (job.status === 'failed') throw new Error(`ingest of ${scanPath} failed: ${job.error}`);
     if (Date.now() > deadline) throw new Error(`ingest of ${scanPath} not done after ${timeoutSeconds} s (stage ${job.stage})`);
+    await sleep(100);
+  }
+}
+
+// Posts a shadow job for the dataset (PROTOCOL.md §3.2; `light` is the request's JSON body, e.g.
+// {direction: [x, y, z]}) and waits for it; returns the dataset's metadata after it.
+export async function computeShadows(baseUrl, datasetId, light, { timeoutSeconds = 300 } = {}) {
+  const posted = await fetch(`${baseUrl}/v1/datasets/${datasetId}/shadows`, {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify(light),
+  });
+  if (posted.status !== 202) throw new Error(`shadow job for ${datasetId}: ${posted.status} ${await posted.text()}`);
+  const location = posted.headers.get('location');
+  const deadline = Date.now() + timeoutSeconds * 1000;
+  for (;;) {
+    const job = await getJson(baseUrl + location);
+    if (job.status === 'done') return getJson(`${baseUrl}/v1/datasets/${datasetId}`);
+    if (job.status === 'failed') throw new Error(`shadow job for ${datasetId} failed: ${job.error}`);
+    if (Date.now() > deadline) throw new Error(`shadow job for ${datasetId} not done after ${timeoutSeconds} s (stage ${job.stage})`);
     await sleep(100);
   }
 }

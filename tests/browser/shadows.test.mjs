@@ -1,0 +1,107 @@
+// The Shadows toggle in a real Chromium against a real pointdagd: a dataset without shadows shows no
+// toggle; after a shadow job (a light direction) its page has one, and turning it on darkens the
+// pixels of the voxels its layers call shadowed to the ambient share, leaves lit ones as they were,
+// and lowers the scan's mean luminance; turning it off gives back the unshaded pixels, with no tile
+// or layer fetched again.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { scan } from '../web/lib/config.mjs';
+import { computeShadows, ingest } from '../web/lib/pointdagd.mjs';
+import { openSession } from './browser.mjs';
+import { checkDrawn } from './drawn_check.mjs';
+import { AMBIENT, compareShading, differingPixels, sceneShot, setShadows, waitShadowsSettled } from './shadow_check.mjs';
+
+// From above at 56 degrees (steeper than 45: flat ground does not shadow itself at voxel scale),
+// so that Autzen's trees and buildings cast shadows on the ground beside lit ground.
+const DIRECTION = [0.6, 0.3, -1];
+const PROBES = 4000;
+
+let session;
+let daemon;
+let page;
+let datasetId = null;
+let shadows = null; // the dataset's `shadows` after the job
+
+// The view complete (checkDrawn's checks ran on the same view in the first test; it hides the top
+// bar, which holds the toggle).
+async function waitComplete(page) {
+  await page.waitForFunction(() => {
+    const s = window.pointdagViewer?.state();
+    return s && s.finestVisibleLevelDrawn && s.loading === 0;
+  }, null, { timeout: 60_000, polling: 100 });
+}
+
+before(async () => {
+  session = await openSession();
+  ({ daemon, page } = session);
+  datasetId = await ingest(daemon.url, scan('autzen_trim_pdrf3_rgb.las'), { name: 'autzen-shadows' });
+});
+
+after(async () => {
+  if (session) await session.close();
+});
+
+test('a dataset without shadows has no Shadows toggle', async (t) => {
+  await page.goto(`${daemon.url}/datasets/${datasetId}`);
+  await checkDrawn(page, 'shadows-none', t);
+  assert.equal(await page.locator('#shadows').count(), 0);
+  assert.equal(await page.locator('#shadow-legend').count(), 0);
+  assert.deepEqual(page.errors, []);
+});
+
+test('after a shadow job the page shades shadowed voxels when the toggle is on, and only then', async (t) => {
+  const dataset = await computeShadows(daemon.url, datasetId, { direction: DIRECTION });
+  shadows = dataset.shadows;
+  assert.ok(shadows, `no shadows in the metadata after the job: ${JSON.stringify(dataset)}`);
+  await page.goto(`${daemon.url}/datasets/${datasetId}`);
+  await waitComplete(page);
+  assert.equal(await page.locator('#shadows').isChecked(), false);
+  const off = await sceneShot(page, 'shadows-off');
+  const before = await page.evaluate(() => window.pointdagViewer.state());
+  assert.equal(before.shadows.bytesFetched, 0, 'layers fetched before the toggle was turned on');
+
+  await setShadows(page, true);
+  const on = await waitShadowsSettled(page);
+  assert.equal(on.shadows.tilesShaded, on.tilesOnScreen, JSON.stringify(on.shadows));
+  assert.equal(on.shadows.errors, 0, on.shadows.lastError);
+  assert.equal(on.shadows.missing, 0);
+  assert.equal(on.tilesFetched, before.tilesFetched, 'turning shadows on fetched tiles again');
+  const onShot = await sceneShot(page, 'shadows-on');
+  const probe = await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), PROBES);
+  const m = compareShading(off, onShot, probe);
+  const shadowedShare = probe.filter((p) => p.light === 0).length / probe.length;
+  t.diagnostic(`${probe.length} probed voxels, ${(shadowedShare * 100).toFixed(1)}% shadowed; ${JSON.stringify(m)}; ` +
+    `${on.shadows.bytesFetched} layer bytes for ${on.tilesOnScreen} tiles`);
+  // The light direction gives both: shadowed and lit voxels in view.
+  assert.ok(shadowedShare > 0.05 && shadowedShare < 0.95, `shadowed share ${shadowedShare}`);
+  assert.ok(m.shadowedProbes >= 50 && m.litProbes >= 50, JSON.stringify(m));
+  // Where the layer says shadowed the pixel keeps the ambient share; where lit, all of it.
+  assert.ok(Math.abs(m.shadowedKept - AMBIENT) < 0.06, `shadowed voxels kept ${m.shadowedKept} of their luminance`);
+  assert.ok(m.litKept > 0.97, `lit voxels kept ${m.litKept} of their luminance`);
+  assert.equal(m.brighterPixels, 0, 'the shading brightened pixels');
+  // The scan as a whole darker, by at least half of what its shadowed share implies.
+  const expected = 1 - (1 - AMBIENT) * shadowedShare;
+  assert.ok(m.meanOn < m.meanOff * (1 - (1 - expected) / 2), `mean luminance ${m.meanOff} -> ${m.meanOn}`);
+
+  await setShadows(page, false);
+  const offAgain = await sceneShot(page, 'shadows-off-again');
+  assert.equal(differingPixels(off, offAgain), 0, 'turned off, the view differs from the unshaded one');
+  await setShadows(page, true);
+  const again = await page.evaluate(() => window.pointdagViewer.state());
+  assert.equal(again.tilesFetched, on.tilesFetched, 'toggling fetched tiles again');
+  assert.equal(again.shadows.bytesFetched, on.shadows.bytesFetched, 'toggling fetched layers again');
+  assert.equal(differingPixels(onShot, await sceneShot(page, 'shadows-on-again')), 0);
+  assert.deepEqual(page.errors, []);
+});
+
+test('?shadows=1 opens the page with the shading on', async () => {
+  assert.ok(shadows, 'the shadow job did not run');
+  await page.goto(`${daemon.url}/datasets/${datasetId}?shadows=1`);
+  const state = await waitShadowsSettled(page);
+  assert.equal(await page.locator('#shadows').isChecked(), true);
+  assert.equal(state.shadows.enabled, true);
+  assert.equal(state.shadows.tilesShaded, state.tilesOnScreen);
+  // Sun hours only: a legend.
+  assert.equal(await page.locator('#shadow-legend').count(), shadows.kind === 'sun_hours' ? 1 : 0);
+  assert.deepEqual(page.errors, []);
+});
