@@ -105,3 +105,35 @@ test('?shadows=1 opens the page with the shading on', async () => {
   assert.equal(await page.locator('#shadow-legend').count(), shadows.kind === 'sun_hours' ? 1 : 0);
   assert.deepEqual(page.errors, []);
 });
+
+test('a tile whose layer is missing or corrupt is drawn unshaded, and the view stays whole', async () => {
+  assert.ok(shadows, 'the shadow job did not run');
+  const dataset = await (await fetch(`${daemon.url}/v1/datasets/${datasetId}`)).json();
+  // The first two finest-level layers the page asks for: one answered 404, one with a byte flipped.
+  let faults = 0;
+  await page.route(new RegExp(`/shadows/tiles/${dataset.levels - 1}/`), async (route) => {
+    const fault = faults++;
+    if (fault === 0) return route.fulfill({ status: 404, contentType: 'application/json', body: '{"error": "no layer"}' });
+    if (fault > 1) return route.continue();
+    const response = await route.fetch();
+    const body = Buffer.from(await response.body());
+    body[body.length - 1] ^= 0x40;
+    return route.fulfill({ response, body });
+  });
+  try {
+    await page.goto(`${daemon.url}/datasets/${datasetId}?shadows=1`);
+    const state = await waitShadowsSettled(page);
+    assert.ok(faults >= 2, `only ${faults} finest layers asked for`);
+    assert.equal(state.lastError, null, 'a layer broke the view');
+    assert.equal(state.errors, 0);
+    assert.equal(state.shadows.missing, 1);
+    assert.equal(state.shadows.errors, 1);
+    assert.match(state.shadows.lastError, /CRC-32C mismatch/);
+    assert.equal(state.shadows.tilesWithoutLayer, 2);
+    assert.equal(state.shadows.tilesShaded, state.tilesOnScreen - 2);
+    // The browser reports the 404 itself; nothing else went wrong.
+    assert.deepEqual(page.errors.filter((e) => !/status of 404/.test(e)), []);
+  } finally {
+    await page.unrouteAll();
+  }
+});
