@@ -79,9 +79,10 @@ test('after a shadow job the page shades shadowed voxels when the toggle is on, 
   assert.ok(Math.abs(m.shadowedKept - AMBIENT) < 0.06, `shadowed voxels kept ${m.shadowedKept} of their luminance`);
   assert.ok(m.litKept > 0.97, `lit voxels kept ${m.litKept} of their luminance`);
   assert.equal(m.brighterPixels, 0, 'the shading brightened pixels');
-  // The scan as a whole darker, by at least half of what its shadowed share implies.
-  const expected = 1 - (1 - AMBIENT) * shadowedShare;
-  assert.ok(m.meanOn < m.meanOff * (1 - (1 - expected) / 2), `mean luminance ${m.meanOff} -> ${m.meanOn}`);
+  // The scan as a whole darker: by at least a quarter of what its shadowed share of voxels implies
+  // (shadowed voxels are hidden more often than lit ones: under the canopy that shadows them).
+  const drop = (1 - AMBIENT) * shadowedShare;
+  assert.ok(m.meanOn < m.meanOff * (1 - drop / 4), `mean luminance ${m.meanOff} -> ${m.meanOn}, ${shadowedShare} of voxels shadowed`);
 
   await setShadows(page, false);
   const offAgain = await sceneShot(page, 'shadows-off-again');
