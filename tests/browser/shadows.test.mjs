@@ -2,7 +2,7 @@
 // toggle; after a shadow job (a light direction) its page has one, and turning it on darkens the
 // pixels of the voxels its layers call shadowed to the ambient share, leaves lit ones as they were,
 // and lowers the scan's mean luminance; turning it off gives back the unshaded pixels, with no tile
-// or layer fetched again.
+// or layer fetched again. The 3D Tiles page does the same.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
 import { scan } from '../web/lib/config.mjs';
@@ -49,14 +49,12 @@ test('a dataset without shadows has no Shadows toggle', async (t) => {
   assert.deepEqual(page.errors, []);
 });
 
-test('after a shadow job the page shades shadowed voxels when the toggle is on, and only then', async (t) => {
-  const dataset = await computeShadows(daemon.url, datasetId, { direction: DIRECTION });
-  shadows = dataset.shadows;
-  assert.ok(shadows, `no shadows in the metadata after the job: ${JSON.stringify(dataset)}`);
-  await page.goto(`${daemon.url}/datasets/${datasetId}`);
+// On the page just opened (toggle off): turns shadows on and checks the pixels against the layers.
+// Returns the screenshots and states off and on.
+async function turnOnAndCheck(page, name, t) {
   await waitComplete(page);
   assert.equal(await page.locator('#shadows').isChecked(), false);
-  const off = await sceneShot(page, 'shadows-off');
+  const off = await sceneShot(page, `${name}-off`);
   const before = await page.evaluate(() => window.pointdagViewer.state());
   assert.equal(before.shadows.bytesFetched, 0, 'layers fetched before the toggle was turned on');
 
@@ -66,11 +64,11 @@ test('after a shadow job the page shades shadowed voxels when the toggle is on, 
   assert.equal(on.shadows.errors, 0, on.shadows.lastError);
   assert.equal(on.shadows.missing, 0);
   assert.equal(on.tilesFetched, before.tilesFetched, 'turning shadows on fetched tiles again');
-  const onShot = await sceneShot(page, 'shadows-on');
+  const onShot = await sceneShot(page, `${name}-on`);
   const probe = await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), PROBES);
   const m = compareShading(off, onShot, probe);
   const shadowedShare = probe.filter((p) => p.light === 0).length / probe.length;
-  t.diagnostic(`${probe.length} probed voxels, ${(shadowedShare * 100).toFixed(1)}% shadowed; ${JSON.stringify(m)}; ` +
+  t.diagnostic(`${name}: ${probe.length} probed voxels, ${(shadowedShare * 100).toFixed(1)}% shadowed; ${JSON.stringify(m)}; ` +
     `${on.shadows.bytesFetched} layer bytes for ${on.tilesOnScreen} tiles`);
   // The light direction gives both: shadowed and lit voxels in view.
   assert.ok(shadowedShare > 0.05 && shadowedShare < 0.95, `shadowed share ${shadowedShare}`);
@@ -83,15 +81,33 @@ test('after a shadow job the page shades shadowed voxels when the toggle is on, 
   // (shadowed voxels are hidden more often than lit ones: under the canopy that shadows them).
   const drop = (1 - AMBIENT) * shadowedShare;
   assert.ok(m.meanOn < m.meanOff * (1 - drop / 4), `mean luminance ${m.meanOff} -> ${m.meanOn}, ${shadowedShare} of voxels shadowed`);
+  return { off, onShot, on };
+}
+
+test('after a shadow job the page shades shadowed voxels when the toggle is on, and only then', async (t) => {
+  const dataset = await computeShadows(daemon.url, datasetId, { direction: DIRECTION });
+  shadows = dataset.shadows;
+  assert.ok(shadows, `no shadows in the metadata after the job: ${JSON.stringify(dataset)}`);
+  await page.goto(`${daemon.url}/datasets/${datasetId}`);
+  const { off, onShot, on } = await turnOnAndCheck(page, 'shadows-pdag', t);
 
   await setShadows(page, false);
-  const offAgain = await sceneShot(page, 'shadows-off-again');
+  const offAgain = await sceneShot(page, 'shadows-pdag-off-again');
   assert.equal(differingPixels(off, offAgain), 0, 'turned off, the view differs from the unshaded one');
   await setShadows(page, true);
   const again = await page.evaluate(() => window.pointdagViewer.state());
   assert.equal(again.tilesFetched, on.tilesFetched, 'toggling fetched tiles again');
   assert.equal(again.shadows.bytesFetched, on.shadows.bytesFetched, 'toggling fetched layers again');
-  assert.equal(differingPixels(onShot, await sceneShot(page, 'shadows-on-again')), 0);
+  assert.equal(differingPixels(onShot, await sceneShot(page, 'shadows-pdag-on-again')), 0);
+  assert.deepEqual(page.errors, []);
+});
+
+test('the 3D Tiles page shades its points alike', async (t) => {
+  assert.ok(shadows, 'the shadow job did not run');
+  await page.goto(`${daemon.url}/datasets/${datasetId}/3dtiles`);
+  const { off } = await turnOnAndCheck(page, 'shadows-3dtiles', t);
+  await setShadows(page, false);
+  assert.equal(differingPixels(off, await sceneShot(page, 'shadows-3dtiles-off-again')), 0);
   assert.deepEqual(page.errors, []);
 });
 

@@ -1,7 +1,7 @@
 // `/datasets/{id}` (kind 'pdag': our .pdag tiles, decoded in Web Workers) and
 // `/datasets/{id}/3dtiles` (kind '3dtiles': the 3D Tiles tileset drawn by 3d-tiles-renderer):
 // a full-window scene, a top bar, and the HUD. Both expose the test hooks of contract 5 as
-// window.pointdagViewer. The .pdag page of a dataset with shadows has a "Shadows" toggle
+// window.pointdagViewer. The pages of a dataset with shadows have a "Shadows" toggle
 // (?shadows=1 starts with it on).
 import { h } from './dom.js';
 import { formatBytes, formatDracoRatio, formatFixed, formatInt, formatLength } from './format.js';

@@ -12,7 +12,7 @@ import { boxCorners } from './scene_view.js';
 import { ShadowLayers } from './shadow_layers.js';
 import { probeVoxelLight } from './shadow_probe.js';
 import { SHADOW_AMBIENT, ShadowShading } from './shadow_shading.js';
-import { statRows } from './stat_rows.js';
+import { shadowRow, statRows } from './stat_rows.js';
 import { TileCache } from './tile_cache.js';
 import { TileHierarchy } from './tile_hierarchy.js';
 import { TileLoader } from './tile_loader.js';
@@ -140,17 +140,7 @@ export class PdagViewer {
       decoder: { backend: this.pool.backendUsed, tiles: this.pool.decoded, ms: this.pool.decodeMs, voxels: this.pool.decodedVoxels },
       errors: this.loader.failures,
       lastError: this.loader.lastError,
-      shadows: this.shadows && this.shadowState(),
-    };
-  }
-
-  // Of the drawn tiles: how many are shaded, drawn without a layer, or waiting for theirs.
-  shadowState() {
-    const s = this.shadows;
-    const drawnAs = (what) => this.drawn.filter((n) => n.points?.userData.shadow === what).length;
-    return {
-      enabled: s.shading.enabled, tilesShaded: drawnAs('shaded'), tilesWithoutLayer: drawnAs('none'),
-      loading: s.loading, bytesFetched: s.bytes, missing: s.missing, errors: s.failures, lastError: s.lastError,
+      shadows: this.shadows && this.shadows.state(this.drawn),
     };
   }
 
@@ -168,7 +158,7 @@ export class PdagViewer {
     return statRows(s, this.view.frameMs, `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles`, [
       ['Resident', `${formatInt(s.residentPoints)} / ${formatInt(s.budgetPoints)} points`],
       ['Decode', s.decoder.tiles ? `${(s.decoder.ms / s.decoder.tiles).toFixed(1)} ms/tile (${s.decoder.backend})` : '–'],
-      ...(s.shadows ? [['Shadows', s.shadows.enabled ? `${s.shadows.tilesShaded} of ${s.tilesOnScreen} tiles shaded` : 'off']] : []),
+      ...(s.shadows ? [shadowRow(s)] : []),
     ]);
   }
 }

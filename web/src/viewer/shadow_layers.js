@@ -44,7 +44,18 @@ export class ShadowLayers {
     }
   }
 
-  // Gives the node's resident points their layer: `pending` (a fetch() started beside the tile's),
+  // The shading as the viewers' state() reports it, for the drawn nodes: how many are shaded, drawn
+  // without a layer (missing or refused), or waiting for theirs.
+  state(drawn) {
+    const drawnAs = (what) => drawn.filter((n) => n.points?.userData.shadow === what).length;
+    return {
+      enabled: this.shading.enabled, tilesShaded: drawnAs('shaded'), tilesWithoutLayer: drawnAs('none'),
+      loading: this.loading, bytesFetched: this.bytes, missing: this.missing, errors: this.failures, lastError: this.lastError,
+    };
+  }
+
+  // node: {points (THREE.Points, null once evicted), voxels, path() 'L/X/Y/Z'} (a TileNode, or the
+  // 3D Tiles view's stand-in). Gives the node's resident points their layer: `pending` (a fetch() started beside the tile's),
   // else a fetch of its own when shadows are wanted. The points' userData.shadow says how it went:
   // 'loading', 'shaded' or 'none'.
   adopt(node, pending = null) {

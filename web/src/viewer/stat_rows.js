@@ -14,3 +14,8 @@ export function statRows(s, frameMs, fetched, extra = []) {
     ['Status', s.lastError ? `error: ${s.lastError}` : s.finestVisibleLevelDrawn ? 'complete' : 'streaming'],
   ];
 }
+
+// The Shadows row of a viewer whose dataset has shadows.
+export function shadowRow(s) {
+  return ['Shadows', s.shadows.enabled ? `${s.shadows.tilesShaded} of ${s.tilesOnScreen} tiles shaded` : 'off'];
+}

@@ -1,7 +1,8 @@
 // The same dataset drawn from its 3D Tiles 1.1 tileset (GET /v1/datasets/{id}/3dtiles/tileset.json,
 // .glb point tiles with EXT_meshopt_compression + KHR_mesh_quantization) by 3d-tiles-renderer.
 // The tileset's root transform is ENU->ECEF: the tiles group sits under its inverse, shifted to the
-// centre of the dataset's bounds, so this view shares PdagViewer's frame and camera.
+// centre of the dataset's bounds, so this view shares PdagViewer's frame and camera. Shadows shade
+// the points as in PdagViewer: a .glb holds the tile's voxels in the Morton order of its layer.
 import * as THREE from 'three';
 import { TilesRenderer } from '3d-tiles-renderer';
 import { GLTFExtensionsPlugin } from '3d-tiles-renderer/plugins';
@@ -11,9 +12,12 @@ import { ByteCounterPlugin } from './byte_counter_plugin.js';
 import { worldPointSize } from './point_materials.js';
 import { positiveParam } from './query_param.js';
 import { boxCorners } from './scene_view.js';
-import { statRows } from './stat_rows.js';
+import { ShadowLayers } from './shadow_layers.js';
+import { probeVoxelLight } from './shadow_probe.js';
+import { SHADOW_AMBIENT, ShadowShading } from './shadow_shading.js';
+import { shadowRow, statRows } from './stat_rows.js';
 
-const LEVEL_OF_URL = /(?:^|\/)(\d+)\/\d+\/\d+\/\d+\.glb(?:\?|$)/; // tiles are L/X/Y/Z.glb
+const TILE_OF_URL = /(?:^|\/)((\d+)\/\d+\/\d+\/\d+)\.glb(?:\?|$)/; // tiles are L/X/Y/Z.glb: [, path, level]
 
 export class Tiles3dViewer {
   // params: ?sse=PIXELS (as PdagViewer: refine while a voxel projects larger than this).
@@ -35,7 +39,14 @@ export class Tiles3dViewer {
     this.frameGroup.add(this.tiles.group);
     view.scene.add(this.frameGroup);
     this.tiles.addEventListener('needs-update', () => view.requestRender());
-    this.tiles.addEventListener('load-model', (e) => this.styleModel(e.scene, e.url));
+    this.shadows = dataset.shadows
+      ? new ShadowLayers(api, dataset.id, new ShadowShading(), () => view.requestRender()) : null;
+    this.shadowTiles = new Map(); // a model's scene -> its stand-in for ShadowLayers
+    this.tiles.addEventListener('load-model', (e) => {
+      this.styleModel(e.scene, e.url);
+      this.adoptShadows(e.scene, e.url);
+    });
+    this.tiles.addEventListener('dispose-model', (e) => this.dropShadows(e.scene));
     this.tiles.addEventListener('load-error', (e) => { this.lastError = `${e.url}: ${e.error.message}`; });
     this.complete = false;
     this.firstFrameMs = null;
@@ -68,9 +79,9 @@ export class Tiles3dViewer {
 
   // glTF points are 1 px wide: make them as wide as their level's voxel, as in PdagViewer.
   styleModel(scene, url) {
-    const match = String(url).match(LEVEL_OF_URL);
+    const match = String(url).match(TILE_OF_URL);
     if (!match) return;
-    const level = Number(match[1]);
+    const level = Number(match[2]);
     const voxel = this.dataset.voxel_size * 2 ** (this.dataset.levels - 1 - level);
     scene.traverse((obj) => {
       if (!obj.isPoints) return;
@@ -79,6 +90,44 @@ export class Tiles3dViewer {
       obj.material.vertexColors = !!obj.geometry.attributes.color;
       obj.material.needsUpdate = true;
     });
+  }
+
+  // The model's stand-in for ShadowLayers: {points, voxels, path()} of its one Points object.
+  adoptShadows(scene, url) {
+    const match = String(url).match(TILE_OF_URL);
+    if (!this.shadows || !match) return;
+    let points = null;
+    scene.traverse((obj) => { if (obj.isPoints) points = obj; });
+    if (!points) return;
+    const node = { points, plain: points.material, voxels: points.geometry.attributes.position.count, path: () => match[1] };
+    this.shadowTiles.set(scene, node);
+    this.shadows.adopt(node);
+  }
+
+  // The renderer disposes of the model's geometry and its (shaded) material; the plain one goes too.
+  dropShadows(scene) {
+    const node = this.shadowTiles.get(scene);
+    if (!node) return;
+    this.shadowTiles.delete(scene);
+    if (node.points.material !== node.plain) node.plain.dispose();
+    node.points = null; // a layer still on its way is dropped
+  }
+
+  get shadowAmbient() {
+    return SHADOW_AMBIENT;
+  }
+
+  setShadows(on) {
+    if (this.shadows) this.shadows.setEnabled(on, this.shadowTiles.values());
+  }
+
+  visibleShadowTiles() {
+    return this.visibleTiles().map((t) => this.shadowTiles.get(t.engineData.scene)).filter(Boolean);
+  }
+
+  // Test hook, as PdagViewer's.
+  shadowProbe(limit) {
+    return probeVoxelLight(this.visibleShadowTiles(), this.view, limit);
   }
 
   // The root tile's bounding box, in the viewer's frame.
@@ -120,8 +169,8 @@ export class Tiles3dViewer {
     const levels = new Set();
     let points = 0;
     for (const tile of this.visibleTiles()) {
-      const match = tile.content && String(tile.content.uri).match(LEVEL_OF_URL);
-      if (match) levels.add(Number(match[1]));
+      const match = tile.content && String(tile.content.uri).match(TILE_OF_URL);
+      if (match) levels.add(Number(match[2]));
       tile.engineData.scene.traverse((obj) => { if (obj.isPoints) points += obj.geometry.attributes.position.count; });
     }
     const s = this.tiles.stats;
@@ -137,6 +186,7 @@ export class Tiles3dViewer {
       tilesFetched: this.byteCounter.tiles,
       tilesetBytes: this.byteCounter.otherBytes,
       lastError: this.lastError,
+      shadows: this.shadows && this.shadows.state(this.visibleShadowTiles()),
     };
   }
 
@@ -148,6 +198,7 @@ export class Tiles3dViewer {
   statRows() {
     const s = this.state();
     return statRows(s, this.view.frameMs,
-      `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles (+ ${formatBytes(s.tilesetBytes)} tileset.json)`);
+      `${formatBytes(s.bytesFetched)} in ${s.tilesFetched} tiles (+ ${formatBytes(s.tilesetBytes)} tileset.json)`,
+      s.shadows ? [shadowRow(s)] : []);
   }
 }
