@@ -65,7 +65,9 @@ describe('malformed layers are refused', () => {
     'another version': [frameShadowLayer(runs, { version: 2, count: n }), n, 'Unsupported', /version 2/],
     'an unknown kind': [frameShadowLayer(runs, { kind: 2, count: n }), n, 'Corrupt', /kind 2/],
     'no samples': [frameShadowLayer(runs, { samples: 0, count: n }), n, 'Corrupt', /0 samples/],
-    '1441 samples': [frameShadowLayer(runs, { samples: 1441, count: n }), n, 'Corrupt', /1441 samples/],
+    '1441 samples': [frameShadowLayer(runs, { kind: 1, samples: 1441, count: n }), n, 'Corrupt', /1441 samples/],
+    'one light (kind 0) with 2 samples': [frameShadowLayer(runs, { samples: 2, count: n }), n, 'Corrupt', /one light with 2 samples/],
+    'no voxels': [frameShadowLayer(new Uint8Array(0), { count: 0 }), 0, 'Corrupt', /no voxels/],
     'a CRC mismatch': [frameShadowLayer(runs, { count: n, crc: crc32c(runs) ^ 1 }), n, 'Corrupt', /CRC/],
     'a count other than the tile\'s': [frameShadowLayer(runs, { count: n + 1 }), n, 'Corrupt', /7 voxels for a tile of 6/],
     'a run passing n': [frameShadowLayer(Uint8Array.from([0, 2, 255, 3]), { count: n }), n, 'Corrupt', /passes/],
@@ -85,7 +87,7 @@ describe('malformed layers are refused', () => {
   }
 
   test('every truncation and every single-bit flip: a PdagError, or (a flip the CRC does not cover) the same voxels', () => {
-    const valid = encodeShadowLayer(Uint8Array.from({ length: 600 }, (_, i) => (i % 97 < 40 ? 0 : 200 + (i % 3))), { samples: 3 });
+    const valid = encodeShadowLayer(Uint8Array.from({ length: 600 }, (_, i) => (i % 97 < 40 ? 0 : 200 + (i % 3))), { kind: 1, samples: 3 });
     for (let len = 0; len < valid.length; ++len) refusal(valid.subarray(0, len), 600);
     let decoded = 0;
     for (let bit = 0; bit < valid.length * 8; ++bit) {
@@ -100,7 +102,12 @@ describe('malformed layers are refused', () => {
         if (!(err instanceof PdagError)) throw err;
       }
     }
-    // Only the kind (0 -> 1) and the samples (3 -> another count within 1..1440) can change and stay valid.
+    // Only the samples (3 -> another count within 1..1440) can change and stay valid.
     assert.ok(decoded > 0 && decoded <= 16, `${decoded} flips decoded`);
+  });
+
+  test('runs need not be maximal: two runs of one value in a row are read as written', () => {
+    const layer = decodeShadowLayer(frameShadowLayer(Uint8Array.from([0, 1, 0, 0, 255, 0]), { count: 4 }), 4);
+    assert.deepEqual([...layer.light], [0, 0, 0, 255]);
   });
 });

@@ -5,7 +5,7 @@ import { h } from './dom.js';
 // shadows: the dataset's `shadows` metadata (PROTOCOL.md §3.2); ambient: the darkest factor.
 export class SunHoursLegend {
   constructor(shadows, ambient) {
-    const hours = (Date.parse(shadows.until) - Date.parse(shadows.time)) / 3_600_000;
+    const hours = shadows.hours ?? (Date.parse(shadows.until) - Date.parse(shadows.time)) / 3_600_000;
     const top = Number.isFinite(hours) && hours > 0 ? `${+hours.toFixed(1)} h` : 'all samples';
     const dark = Math.round(255 * ambient);
     this.element = h('div.shadow-legend#shadow-legend', { hidden: true },

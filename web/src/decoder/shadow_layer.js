@@ -1,6 +1,6 @@
 // decodeShadowLayer(bytes, tileVoxels): a tile's shadow layer (GET /v1/datasets/{id}/shadows/tiles/...,
 // proto/SHADOW_FORMAT.md §2) -> {kind, samples, count, light: Uint8Array(count)}, one byte of light per
-// voxel in the tile's Morton order (0 = shadowed, 255 = lit at every sample).
+// voxel in the tile's Morton order (0 = shadowed, 255 = lit at every sample). Runs need not be maximal.
 // Every malformed layer throws PdagError (the decoders' one error type): 'Corrupt' for bytes that
 // contradict the format, 'Unsupported' for another version. The light array is sized by
 // `tileVoxels`, the count the tile's own hierarchy entry gives, never by the layer's header alone.
@@ -25,7 +25,9 @@ export function decodeShadowLayer(bytes, tileVoxels) {
   const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   const samples = view.getUint16(6, true);
   if (samples < 1 || samples > MAX_SHADOW_SAMPLES) throw corrupt(`shadow layer with ${samples} samples, outside 1..${MAX_SHADOW_SAMPLES}`);
+  if (kind === SHADOW_KIND_DIRECTION && samples !== 1) throw corrupt(`shadow layer of one light with ${samples} samples`);
   const count = view.getUint32(8, true);
+  if (count === 0) throw corrupt('shadow layer of no voxels');
   if (count !== tileVoxels) throw corrupt(`shadow layer of ${count} voxels for a tile of ${tileVoxels}`);
   if (crc32c(bytes.subarray(HEADER_BYTES)) !== view.getUint32(12, true)) throw corrupt('shadow layer CRC-32C mismatch');
 
