@@ -25,7 +25,7 @@ Status InTransaction(sqlite3* db, Body&& body) {
 StatusOr<std::optional<std::string>> Store::CreateShadowJob(const JobRecord& job) {
   std::optional<std::string> existing;
   std::lock_guard lock(write_mutex_);
-  RETURN_IF_ERROR(InTransaction(writer_, [&]() -> Status {
+  const auto body = [&]() -> Status {
     Statement busy(writer_,
                    "SELECT id FROM jobs WHERE kind='shadows' AND dataset_id=? AND state IN ('queued','running') "
                    "ORDER BY created LIMIT 1");
@@ -41,7 +41,8 @@ StatusOr<std::optional<std::string>> Store::CreateShadowJob(const JobRecord& job
         .Bind(job.id, job.state, job.stage, job.percent, job.points_in, job.voxels_out, job.dataset_id, job.error,
               job.upload_path, DumpJson(job.params), now, now, job.attempts, std::string("shadows"))
         .Run();
-  }));
+  };
+  RETURN_IF_ERROR(InTransaction(writer_, body));
   return existing;
 }
 
@@ -89,11 +90,12 @@ StatusOr<std::optional<StoredTile>> Store::GetShadowTile(const std::string& data
 StatusOr<bool> Store::DeleteShadows(const std::string& dataset_id) {
   std::lock_guard lock(write_mutex_);
   bool deleted = false;
-  RETURN_IF_ERROR(InTransaction(writer_, [&]() -> Status {
+  const auto body = [&]() -> Status {
     RETURN_IF_ERROR(Statement(writer_, "DELETE FROM shadow_sets WHERE dataset_id=?").Bind(dataset_id).Run());
     deleted = sqlite3_changes(writer_) > 0;
     return Status::Ok();
-  }));
+  };
+  RETURN_IF_ERROR(InTransaction(writer_, body));
   return deleted;
 }
 
