@@ -5,6 +5,8 @@
 //   pointdag compare IN (--voxel SIZE | --depth D) [--json]
 //   pointdag bench [--data DIR] [--json]
 //   pointdag export IN.pdag|URL --3dtiles DIR
+//   pointdag shadow IN (--direction X,Y,Z | --time ISO8601 [--until ISO8601 --samples N]) (--voxel S | --depth D)
+//                   [--json] [-o OUT.ply|OUT.pdsh]   (shadow_command.h)
 // Exit codes: 0 ok, 1 bad input (message on stderr), 2 usage.
 #include <unistd.h>
 
@@ -25,6 +27,7 @@
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
 #include "progress.h"
+#include "shadow_command.h"
 
 namespace pointdag {
 namespace {
@@ -305,6 +308,9 @@ int Main(int argc, char** argv) {
   export_cmd->add_option("input", input, "IN.pdag or http://HOST:PORT/v1/datasets/ID")->required();
   export_cmd->add_option("--3dtiles", tiles3d_dir, "output folder: tileset.json and {level}/{x}/{y}/{z}.glb")->required();
 
+  ShadowCommand shadow_command;
+  auto* shadow = AddShadowCommand(app, shadow_command);
+
   BenchOptions bench_options;
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
@@ -373,6 +379,7 @@ int Main(int argc, char** argv) {
   if (bench->parsed()) return RunBench(bench_options);
   if (fetch->parsed()) return RunFetch(url, level, output);
   if (export_cmd->parsed()) return RunExport(input, tiles3d_dir);
+  if (shadow->parsed()) return RunShadowCommand(shadow_command);
   return 2;
 }
 
