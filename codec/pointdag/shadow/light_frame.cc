@@ -12,6 +12,7 @@ StatusOr<LightFrame> LightFrame::Create(const std::array<double, 3>& travel, int
   const double length = std::sqrt(travel[0] * travel[0] + travel[1] * travel[1] + travel[2] * travel[2]);
   if (!std::isfinite(length) || length < 1e-9) return InvalidArgument("light travel must be a finite non-zero vector");
   LightFrame f;
+  f.travel_ = travel;
   f.depth_ = depth;
   f.light_depth_ = light_depth;
   auto& z = f.axes_[2];

@@ -29,12 +29,13 @@ class LightFrame {
   // (or for NaN). A point on the cube's far faces belongs to the last cell.
   std::optional<std::array<uint32_t, 3>> Cell(const std::array<double, 3>& grid_point) const;
 
-  const std::array<double, 3>& travel() const { return axes_[2]; }
+  const std::array<double, 3>& travel() const { return travel_; }  // as given (z' is it normalized)
   int depth() const { return depth_; }
   int light_depth() const { return light_depth_; }
   double cell_size() const { return cell_; }  // in voxels
 
  private:
+  std::array<double, 3> travel_{};
   std::array<std::array<double, 3>, 3> axes_{};  // rows: x', y', z'
   int depth_ = 0;
   int light_depth_ = 0;
