@@ -152,15 +152,18 @@ void PrintSummary(const nlohmann::json& r) {
   }
   std::printf("%s\n", r["below_horizon"].get<bool>() ? " - below the horizon: everything in shadow" : "");
   const double voxels = std::max(1.0, r["surface_voxels"].get<double>());
-  const double dag_bytes = std::max(1.0, r["shadow_dag_bytes"].get<double>());
   std::printf("  shadowed %llu of them (%.1f %%)\n", r["shadowed_voxels"].get<unsigned long long>(),
               100.0 * r["shadowed_voxels"].get<double>() / voxels);
-  std::printf("  shadow DAG %llu bytes at light depth %d; dense grid %llu bytes (%.1fx), shadow map %llu bytes (%.1fx); "
-              "built in %.3f s\n",
+  const double dag_bytes = r["shadow_dag_bytes"].get<double>();
+  const auto ratio = [&](const char* key) {  // a night's DAG can be empty: no ratio then
+    char text[32] = "";
+    if (dag_bytes > 0) std::snprintf(text, sizeof(text), " (%.1fx)", r[key].get<double>() / dag_bytes);
+    return std::string(text);
+  };
+  std::printf("  shadow DAG %llu bytes at light depth %d; dense grid %llu bytes%s, shadow map %llu bytes%s; built in %.3f s\n",
               r["shadow_dag_bytes"].get<unsigned long long>(), r["light_depth"].get<int>(),
-              r["dense_grid_bytes"].get<unsigned long long>(), r["dense_grid_bytes"].get<double>() / dag_bytes,
-              r["shadow_map_bytes"].get<unsigned long long>(), r["shadow_map_bytes"].get<double>() / dag_bytes,
-              r["build_seconds"].get<double>());
+              r["dense_grid_bytes"].get<unsigned long long>(), ratio("dense_grid_bytes").c_str(),
+              r["shadow_map_bytes"].get<unsigned long long>(), ratio("shadow_map_bytes").c_str(), r["build_seconds"].get<double>());
   if (!r["sun_hours"].is_null()) {
     const auto& h = r["sun_hours"];
     std::printf("  sun hours over %.2f h from %d samples: mean %.2f, min %.2f, max %.2f; never lit %llu, always lit %llu\n",
