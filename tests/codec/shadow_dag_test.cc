@@ -113,6 +113,10 @@ TEST(ShadowDag, BelowTheHorizonEverythingIsShadowed) {
   auto again = ShadowDag::Deserialize(shadow->Serialize());
   ASSERT_TRUE(again.ok()) << again.status().ToString();
   EXPECT_TRUE(again->Shadowed({3.5, 9.5, 0.5}));
+  night.travel = {std::nan(""), 0, 0};  // no direction at night is still night
+  auto nan_night = BuildShadowDag(dag, night);
+  ASSERT_TRUE(nan_night.ok()) << nan_night.status().ToString();
+  EXPECT_TRUE(nan_night->Shadowed({4.5, 4.5, 2.5}));
 }
 
 TEST(ShadowDag, RefusesBadOptionsAndLights) {
@@ -130,8 +134,9 @@ TEST(ShadowDag, RefusesBadOptionsAndLights) {
 TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
   SKIP_WITHOUT_DATA();
   for (const auto& [name, depth] : std::vector<std::pair<std::string, int>>{
-           {"tiny_1.2-with-color_1065pts.las", 6}, {"lion_takanawa_pdrf7_rgb.las", 6},
-           {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 6}, {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", 7}}) {
+           {"tiny_1.2-with-color_1065pts.las", 6}, {"lion_takanawa_pdrf7_rgb.las", 8},
+           {"pcl_milk_cartoon_clorox_kinect_rgb.ply", 7}, {"ign_lidarhd_870000_6618000_pdrf8_rgb_epsg2154.las", 7},
+           {"pcx_guanyin_cc-by-4.0_rgb.ply", 7}, {"autzen_trim_pdrf3_rgb.las", 7}, {"lone_star_tls_noRGB.las", 7}}) {
     const Svdag dag = ScanDag(name, depth);
     for (const Light& light : kDirections) {
       const auto exact = ShadowedVoxels(dag, light);

@@ -15,7 +15,11 @@ StatusOr<ShadowDag> BuildShadowDag(const Svdag& dag, const Light& light, const S
   const auto start = std::chrono::steady_clock::now();
   if (options.extra_levels < 2 || options.extra_levels > 8) return InvalidArgument("extra_levels must be in 2..8");
   auto impl = std::make_unique<ShadowDag::Impl>();
-  ASSIGN_OR_RETURN(impl->frame, LightFrame::Create(light.travel, dag.depth, dag.depth + options.extra_levels));
+  auto frame = LightFrame::Create(light.travel, dag.depth, dag.depth + options.extra_levels);
+  // Below the horizon every answer is "shadowed" whatever the travel; a NaN one still gets a frame.
+  if (!frame.ok() && light.below_horizon) frame = LightFrame::Create({0, 0, -1}, dag.depth, dag.depth + options.extra_levels);
+  RETURN_IF_ERROR(frame.status());
+  impl->frame = *frame;
   impl->below_horizon = light.below_horizon;
   ASSIGN_OR_RETURN(const std::vector<uint8_t> shadowed, ShadowedVoxels(dag, light));
 
