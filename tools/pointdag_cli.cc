@@ -94,11 +94,15 @@ StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
   return options;
 }
 
-int RunFetch(const std::string& url, std::optional<int> level, const std::string& output) {
+int RunFetch(const std::string& url, std::optional<int> level, const std::string& output, bool shadows) {
   const auto start = std::chrono::steady_clock::now();
-  auto fetched = client::FetchDataset(url, level);
+  auto fetched = client::FetchDataset(url, level, {}, {}, shadows);
   if (!fetched.ok()) return Fail(fetched.status());
-  if (Status s = WriteVoxelsPly(output, fetched->grid); !s.ok()) return Fail(s);
+  // --shadows: each voxel's lit fraction (its shadow layer's byte / 255) as the property `light`.
+  std::vector<float> light(fetched->light.size());
+  std::transform(fetched->light.begin(), fetched->light.end(), light.begin(), [](uint8_t b) { return static_cast<float>(b) / 255.0f; });
+  const auto scalar = shadows ? std::optional<PlyScalar>(PlyScalar{"light", light}) : std::nullopt;
+  if (Status s = WriteVoxelsPly(output, fetched->grid, scalar); !s.ok()) return Fail(s);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "%s: level %d, %zu tiles (%llu bytes), %zu voxels of %.6g in %.2f s\n", output.c_str(), fetched->level,
                fetched->tiles, static_cast<unsigned long long>(fetched->tile_bytes), fetched->grid.morton.size(),
@@ -303,6 +307,8 @@ int Main(int argc, char** argv) {
   fetch->add_option("url", url, "http://HOST:PORT/v1/datasets/ID")->required();
   fetch->add_option("--level", level, "level of detail (0 = coarsest; default: the finest)")->check(CLI::NonNegativeNumber);
   fetch->add_option("-o,--output", output, "output .ply (voxel centres in the dataset's frame + RGB)")->required();
+  bool fetch_shadows = false;
+  fetch->add_flag("--shadows", fetch_shadows, "also the dataset's shadow layers: a float property `light` (lit fraction 0..1)");
 
   std::string tiles3d_dir;
   auto* export_cmd = app.add_subcommand("export", "a dataset (a .pdag, or a pointdagd URL) as 3D Tiles 1.1 static files");
@@ -386,7 +392,7 @@ int Main(int argc, char** argv) {
     return RunShadowBench(shadow_bench_dir.empty() ? bench_options.data_dir : shadow_bench_dir, std::cout);
   }
   if (bench->parsed()) return RunBench(bench_options);
-  if (fetch->parsed()) return RunFetch(url, level, output);
+  if (fetch->parsed()) return RunFetch(url, level, output, fetch_shadows);
   if (export_cmd->parsed()) return RunExport(input, tiles3d_dir);
   if (shadow->parsed()) return RunShadowCommand(shadow_command);
   return 2;
