@@ -167,6 +167,7 @@ StatusOr<DatasetShape> ParseDatasetShape(std::string_view body) {
   DatasetShape out;
   ASSIGN_OR_RETURN(static_cast<TileGridShape&>(out), ReadTileGridShape(fields));
   ASSIGN_OR_RETURN(out.points, fields.UintOr("source/points", std::numeric_limits<uint64_t>::max(), 0));
+  out.has_shadows = json.contains("shadows") && json["shadows"].is_object();
   return out;
 }
 
@@ -228,13 +229,27 @@ StatusOr<std::vector<TileAddress>> ListTiles(Connection& connection, const std::
   return std::vector<TileAddress>(keys.begin(), keys.end());
 }
 
+StatusOr<ShadowLayer> FetchShadowLayer(Connection& connection, const std::string& dataset_target, const TileAddress& tile,
+                                       uint64_t tile_voxels) {
+  const std::string target = dataset_target + "/shadows/tiles/" + std::to_string(tile.level) + "/" + std::to_string(tile.x) +
+                             "/" + std::to_string(tile.y) + "/" + std::to_string(tile.z);
+  ASSIGN_OR_RETURN(const Response r, GetOk(connection, target));
+  auto layer = DecodeShadowLayer({reinterpret_cast<const uint8_t*>(r.body.data()), r.body.size()}, tile_voxels);
+  if (!layer.ok()) return Status(layer.status().code(), target + ": " + layer.status().message());
+  return layer;
+}
+
 StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
-                                    const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits) {
+                                    const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits,
+                                    bool shadows) {
   ASSIGN_OR_RETURN(const Url url, ParseUrl(dataset_url));
   ASSIGN_OR_RETURN(std::unique_ptr<Connection> connection, Connection::Open(url.host, url.port, limits.max_body_bytes));
   const auto get = [&](const std::string& target) { return GetOk(*connection, target); };
   ASSIGN_OR_RETURN(const Response described, get(url.target));
   ASSIGN_OR_RETURN(const DatasetShape shape, ParseDatasetShape(described.body));
+  if (shadows && !shape.has_shadows) {
+    return InvalidArgument("the dataset has no shadows: POST " + url.target + "/shadows computes them (PROTOCOL.md §3.2)");
+  }
   FetchedLevel out;
   out.level = level.value_or(shape.levels - 1);
   if (out.level < 0 || out.level >= shape.levels) {
@@ -274,6 +289,10 @@ StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optiona
     const uint64_t tile_code = MortonEncode(key.x, key.y, key.z) << (3 * shape.tile_depth);
     for (uint64_t local : tile.grid.morton) out.grid.morton.push_back(tile_code | local);
     out.grid.colors.insert(out.grid.colors.end(), tile.grid.colors.begin(), tile.grid.colors.end());
+    if (shadows) {
+      ASSIGN_OR_RETURN(const ShadowLayer layer, FetchShadowLayer(*connection, url.target, key, tile.grid.morton.size()));
+      out.light.insert(out.light.end(), layer.light.begin(), layer.light.end());
+    }
     out.tile_bytes += r.body.size();
     ++out.tiles;
     if (progress) progress(out.tiles, ordered.size());

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pointdag/shadow/shadow_layer.h"
 #include "pointdag/tile/tiler.h"
 #include "pointdag/voxelize/voxelizer.h"
 
@@ -59,6 +60,7 @@ class Connection {
 
 struct DatasetShape : TileGridShape {
   uint64_t points = 0;
+  bool has_shadows = false;  // its "shadows" is a summary, not null: layers exist (§3.2)
 };
 // The members of GET /v1/datasets/{id} that FetchDataset needs (proto/PROTOCOL.md §2).
 StatusOr<DatasetShape> ParseDatasetShape(std::string_view body);
@@ -96,11 +98,18 @@ struct FetchedLevel {
   size_t tiles = 0;
   uint64_t tile_bytes = 0;
   VoxelGrid grid;  // the level's voxels in the dataset's frame (ENU metres when georeferenced)
+  std::vector<uint8_t> light;  // with shadows: each voxel's light (SHADOW_FORMAT.md §2), parallel to grid.morton
 };
 
-// `dataset_url`: http://HOST:PORT/v1/datasets/{id}. Level: the finest when not given.
+// GET {dataset_target}/shadows/tiles/{level}/{x}/{y}/{z} (§3.2), decoded against `tile_voxels`, the
+// voxel count of the tile at that address (a layer of another size is refused).
+StatusOr<ShadowLayer> FetchShadowLayer(Connection& connection, const std::string& dataset_target, const TileAddress& tile,
+                                       uint64_t tile_voxels);
+
+// `dataset_url`: http://HOST:PORT/v1/datasets/{id}. Level: the finest when not given. `shadows`:
+// also each tile's shadow layer into `light` (kInvalidArgument when the dataset has no shadows).
 StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
                                     const std::function<void(size_t done, size_t total)>& progress = {},
-                                    const FetchLimits& limits = {});
+                                    const FetchLimits& limits = {}, bool shadows = false);
 
 }  // namespace pointdag::client

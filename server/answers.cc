@@ -125,6 +125,22 @@ std::optional<HttpResponse> RefuseCorruptTile(const StoredTile& tile, const std:
                     route);
 }
 
+nlohmann::json JobJson(const JobRecord& job) {
+  return {{"id", job.id},
+          {"kind", job.kind},
+          {"status", job.state},
+          {"stage", job.stage},
+          {"percent", job.percent},
+          {"points_in", job.points_in},
+          {"voxels_out", job.voxels_out},
+          {"dataset_id", job.dataset_id.empty() ? nlohmann::json() : nlohmann::json(job.dataset_id)},
+          {"dataset", job.dataset_id.empty() ? nlohmann::json() : nlohmann::json("/v1/datasets/" + job.dataset_id)},
+          {"error", job.error.empty() ? nlohmann::json() : nlohmann::json(job.error)},
+          {"params", job.params},
+          {"created", job.created},
+          {"updated", job.updated}};
+}
+
 std::optional<TileKey> ParseTileKey(const std::vector<std::string>& parts, size_t first) {
   if (parts.size() != first + 4) return std::nullopt;
   const auto level = ParseNumber<int>(parts[first]);

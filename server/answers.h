@@ -55,6 +55,9 @@ HttpResponse ImmutableAnswer(const HttpRequest& request, const StoredTile& body,
 std::optional<HttpResponse> RefuseCorruptTile(const StoredTile& tile, const std::string& dataset, const std::string& address,
                                               Metrics& metrics, const std::string& route);
 
+// A job as GET /v1/jobs/{id} answers it (proto/PROTOCOL.md §1).
+nlohmann::json JobJson(const JobRecord& job);
+
 // The whole of `text` as a number, or nullopt.
 template <typename T>
 std::optional<T> ParseNumber(const std::string& text) {

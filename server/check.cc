@@ -5,6 +5,7 @@
 
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/json_text.h"
+#include "pointdag/shadow/shadow_layer.h"
 #include "sqlite_util.h"
 #include "store.h"
 
@@ -71,6 +72,37 @@ Status CheckTiles(sqlite3* db, CheckReport& report) {
   });
 }
 
+// Every shadow set whole: one layer per tile of its dataset, each matching its checksum and
+// decoding to its tile's voxel count. Stores from before shadows have no such tables.
+Status CheckShadows(sqlite3* db, CheckReport& report) {
+  bool present = false;
+  RETURN_IF_ERROR(ForEachRow(db, "SELECT 1 FROM sqlite_master WHERE name = 'shadow_tiles'", [&](const Statement&) { present = true; }));
+  if (!present) return Status::Ok();
+  RETURN_IF_ERROR(ForEachRow(db,
+                             "SELECT s.dataset_id, (SELECT COUNT(*) FROM tiles t WHERE t.dataset_id = s.dataset_id), "
+                             "(SELECT COUNT(*) FROM shadow_tiles l WHERE l.dataset_id = s.dataset_id) FROM shadow_sets s",
+                             [&](const Statement& s) {
+                               if (s.Int(1) == s.Int(2)) return;
+                               report.problems.push_back("the shadow set of dataset " + s.Text(0) + " has " +
+                                                         std::to_string(s.Int(2)) + " layers for " + std::to_string(s.Int(1)) + " tiles");
+                             }));
+  return ForEachRow(db,
+                    "SELECT l.dataset_id, l.level, l.x, l.y, l.z, l.etag, l.bytes, t.voxels FROM shadow_tiles l LEFT JOIN tiles t "
+                    "ON t.dataset_id = l.dataset_id AND t.level = l.level AND t.x = l.x AND t.y = l.y AND t.z = l.z",
+                    [&](const Statement& s) {
+                      const std::string where = "shadow layer " + std::to_string(s.Int(1)) + "/" + std::to_string(s.Int(2)) + "/" +
+                                                std::to_string(s.Int(3)) + "/" + std::to_string(s.Int(4)) + " of dataset " + s.Text(0);
+                      const std::vector<uint8_t> bytes = s.Blob(6);
+                      if (s.IsNull(7)) {
+                        report.problems.push_back(where + ": no such tile");
+                      } else if (TileEtag(bytes) != s.Text(5)) {
+                        report.problems.push_back(where + ": its bytes do not match their checksum " + s.Text(5));
+                      } else if (const auto layer = DecodeShadowLayer(bytes, static_cast<uint64_t>(s.Int(7))); !layer.ok()) {
+                        report.problems.push_back(where + ": " + layer.status().ToString());
+                      }
+                    });
+}
+
 Status CheckJobs(sqlite3* db, const std::filesystem::path& upload_dir, CheckReport& report) {
   std::set<std::string> datasets;
   RETURN_IF_ERROR(ForEachRow(db, "SELECT id FROM datasets", [&](const Statement& s) { datasets.insert(s.Text(0)); }));
@@ -124,6 +156,7 @@ StatusOr<CheckReport> CheckDataDir(const std::filesystem::path& data_dir) {
   }));
   RETURN_IF_ERROR(CheckDatasets(c.db, report));
   RETURN_IF_ERROR(CheckTiles(c.db, report));
+  RETURN_IF_ERROR(CheckShadows(c.db, report));
   RETURN_IF_ERROR(CheckJobs(c.db, data_dir / "uploads", report));
   return report;
 }

@@ -5,7 +5,8 @@
 // (tile_count); every tile's bytes match their checksum (XXH3 == ETag) and parse as a .pdag with
 // valid CRCs; no tile belongs to no dataset; no file in uploads/ that no queued or running job
 // references; every job in a known state, failed ones with a reason, done ones pointing at an
-// existing dataset (unless it was deleted since). Reads only; tiles are read one at a time.
+// existing dataset (unless it was deleted since); every shadow set whole (a layer per tile, each
+// sound and of its tile's voxel count). Reads only; tiles are read one at a time.
 #pragma once
 
 #include <cstdint>

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "pointdag/ingest.h"
+#include "shadow_job.h"
 
 namespace pointdag::server {
 namespace {
@@ -95,7 +96,7 @@ void JobQueue::Resume() {
                        " times (the daemon stopped or crashed while running it); not retried", job.upload_path);
       continue;
     }
-    if (!std::filesystem::exists(job.upload_path)) {
+    if (job.kind == "ingest" && !std::filesystem::exists(job.upload_path)) {
       Fail(job.id, "the daemon stopped during this job and its upload is gone", job.upload_path);
       continue;
     }
@@ -189,7 +190,7 @@ void JobQueue::Run(const std::string& job_id) {
   std::string reason;
   // The one place a job's exceptions end (also those carried out of the tiler's parallel loops).
   try {
-    reason = Ingest(**job);
+    reason = (*job)->kind == "shadows" ? RunShadowJob(store_, **job) : Ingest(**job);
   } catch (const std::bad_alloc&) {
     reason = "Internal: the job ran out of memory (std::bad_alloc)";
   } catch (const std::exception& e) {
@@ -202,7 +203,7 @@ void JobQueue::Run(const std::string& job_id) {
     return;
   }
   std::error_code ignored;
-  std::filesystem::remove((*job)->upload_path, ignored);  // the dataset and the done state are durable
+  if (!(*job)->upload_path.empty()) std::filesystem::remove((*job)->upload_path, ignored);  // the dataset and the done state are durable
 }
 
 std::string JobQueue::Ingest(const JobRecord& job) {

@@ -1,4 +1,6 @@
-// The ingest job queue: bounded, persisted in the store, run by a pool of worker threads.
+// The job queue: bounded, persisted in the store, run by a pool of worker threads. Most jobs are
+// ingests (below); a "shadows" job computes a dataset's shadow set instead (shadow_job.h), has no
+// upload, and otherwise follows the same rules (counted starts, resumed after a restart, failures).
 //
 // Contract: Submit() refuses (returns false) when `capacity` jobs are already waiting. A job runs
 // IngestScan on its upload, then commits the dataset, its tiles and the job's "done" state in one

@@ -42,6 +42,12 @@ std::string UrlDecode(const std::string& text) {
   return out;
 }
 
+HttpResponse MethodNotAllowed(const HttpRequest& request, const std::string& route, const std::string& allow) {
+  HttpResponse r = FailAnswer(405, request.method + " is not allowed here (" + allow + ")", route);
+  r.SetHeader("Allow", allow);
+  return r;
+}
+
 std::string PathOf(const std::string& target) { return target.substr(0, target.find('?')); }
 
 std::string QueryOf(const std::string& target) {
@@ -74,7 +80,8 @@ Service::Service(Store& store, JobQueue& jobs, Metrics& metrics, ServiceConfig c
       cors_(config_.cors_origins),
       cache_(config_.tile_cache_bytes),
       tiles3d_(store_, metrics_, config_.tiles3d_cache_bytes),
-      reports_(config_.reports_dir) {}
+      reports_(config_.reports_dir),
+      shadows_(store_, jobs_, metrics_) {}
 
 void Service::AddCors(HttpResponse& response, const std::string& origin) const {
   for (auto& [name, value] : cors_.Headers(origin)) response.SetHeader(name, value);
@@ -221,21 +228,6 @@ HttpResponse Service::GetJob(const std::string& id) {
   return JsonAnswer(200, JobJson(**job), route);
 }
 
-nlohmann::json Service::JobJson(const JobRecord& job) {
-  return {{"id", job.id},
-          {"status", job.state},
-          {"stage", job.stage},
-          {"percent", job.percent},
-          {"points_in", job.points_in},
-          {"voxels_out", job.voxels_out},
-          {"dataset_id", job.dataset_id.empty() ? nlohmann::json() : nlohmann::json(job.dataset_id)},
-          {"dataset", job.dataset_id.empty() ? nlohmann::json() : nlohmann::json("/v1/datasets/" + job.dataset_id)},
-          {"error", job.error.empty() ? nlohmann::json() : nlohmann::json(job.error)},
-          {"params", job.params},
-          {"created", job.created},
-          {"updated", job.updated}};
-}
-
 HttpResponse Service::Route(const HttpRequest& request) {
   const std::string path = PathOf(request.target);
   const std::vector<std::string> parts = SplitPath(path);
@@ -250,9 +242,7 @@ HttpResponse Service::Route(const HttpRequest& request) {
   }
   const bool get = request.method == "GET" || request.method == "HEAD";
   const auto method_not_allowed = [&](const std::string& route, const std::string& allow) {
-    HttpResponse r = FailAnswer(405, request.method + " is not allowed here (" + allow + ")", route);
-    r.SetHeader("Allow", allow);
-    return r;
+    return MethodNotAllowed(request, route, allow);
   };
   if (path == "/livez") return get ? JsonAnswer(200, {{"status", "alive"}}, path) : method_not_allowed(path, "GET");
   if (path == "/readyz") {
@@ -325,6 +315,7 @@ HttpResponse Service::Route(const HttpRequest& request) {
       if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
       return tiles3d_.Get(request, id, {parts.begin() + 4, parts.end()});
     }
+    if (parts[3] == "shadows") return RouteShadows(request, id, parts);
   }
   if (get) {
     if (config_.web) {
@@ -336,6 +327,29 @@ HttpResponse Service::Route(const HttpRequest& request) {
     }
   }
   return FailAnswer(404, "no such resource: " + path, "other");
+}
+
+HttpResponse Service::RouteShadows(const HttpRequest& request, const std::string& id, const std::vector<std::string>& parts) {
+  const bool get = request.method == "GET" || request.method == "HEAD";
+  const auto method_not_allowed = [&](const std::string& route, const std::string& allow) {
+    return MethodNotAllowed(request, route, allow);
+  };
+  if (parts.size() > 4) {
+    const std::string route = ShadowService::kTilesRoute;
+    if (!get) return method_not_allowed(route, "GET");
+    if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+    const auto key = parts[4] == "tiles" ? ParseTileKey(parts, 5) : std::nullopt;
+    if (!key) return FailAnswer(400, "a shadow layer is addressed as shadows/tiles/{level}/{x}/{y}/{z} with level 0..21", route);
+    return shadows_.GetLayer(request, id, *key);
+  }
+  const std::string route = ShadowService::kRoute;
+  if (request.method == "POST" || request.method == "DELETE") {
+    if (auto denied = Deny(request, Scope::kWrite, route)) return *denied;
+    return request.method == "POST" ? shadows_.Post(request, id) : shadows_.Delete(id);
+  }
+  if (!get) return method_not_allowed(route, "GET, POST, DELETE");
+  if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+  return shadows_.Get(id);
 }
 
 HttpResponse Service::GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key) {

@@ -1,6 +1,7 @@
 // The HTTP API of pointdagd (proto/PROTOCOL.md) as plain functions of a request: no sockets here,
 // so every rule — auth, limits, ETag/304, Range/206/416 (answers.h), CORS — lives in one place the
-// transport (http_server.cc) merely carries. The 3D Tiles routes are tiles3d_service.h's.
+// transport (http_server.cc) merely carries. The 3D Tiles routes are tiles3d_service.h's, the
+// shadow routes shadow_service.h's.
 #pragma once
 
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include "jobs.h"
 #include "metrics.h"
 #include "reports_service.h"
+#include "shadow_service.h"
 #include "store.h"
 #include "tile_cache.h"
 #include "tiles3d_service.h"
@@ -62,9 +64,9 @@ class Service {
   std::optional<HttpResponse> Admit(const HttpRequest& request) const;
   HttpResponse Finish(const HttpRequest& request, const std::filesystem::path& file);
   HttpResponse GetJob(const std::string& id);
+  HttpResponse RouteShadows(const HttpRequest& request, const std::string& id, const std::vector<std::string>& parts);
   HttpResponse GetTile(const HttpRequest& request, const std::string& dataset, const TileKey& key);
   HttpResponse GetHierarchy(const HttpRequest& request, const std::string& dataset, const TileKey& key);
-  static nlohmann::json JobJson(const JobRecord& job);
 
   Store& store_;
   JobQueue& jobs_;
@@ -75,6 +77,7 @@ class Service {
   TileCache cache_;
   Tiles3dService tiles3d_;
   ReportsService reports_;
+  ShadowService shadows_;
   bool ready_ = false;
 };
 

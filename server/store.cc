@@ -19,7 +19,7 @@ CREATE TABLE IF NOT EXISTS jobs (
   id TEXT PRIMARY KEY, state TEXT NOT NULL, stage TEXT NOT NULL, percent REAL NOT NULL,
   points_in INTEGER NOT NULL, voxels_out INTEGER NOT NULL, dataset_id TEXT NOT NULL, error TEXT NOT NULL,
   upload_path TEXT NOT NULL, params TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL,
-  attempts INTEGER NOT NULL DEFAULT 0);
+  attempts INTEGER NOT NULL DEFAULT 0, kind TEXT NOT NULL DEFAULT 'ingest');
 CREATE TABLE IF NOT EXISTS datasets (
   id TEXT PRIMARY KEY, name TEXT NOT NULL, created REAL NOT NULL, meta TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -27,14 +27,26 @@ CREATE TABLE IF NOT EXISTS tiles (
   level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, z INTEGER NOT NULL,
   voxels INTEGER NOT NULL, etag TEXT NOT NULL, bytes BLOB NOT NULL,
   PRIMARY KEY (dataset_id, level, x, y, z));
+CREATE TABLE IF NOT EXISTS shadow_sets (
+  dataset_id TEXT PRIMARY KEY REFERENCES datasets(id) ON DELETE CASCADE,
+  job_id TEXT NOT NULL, created REAL NOT NULL, summary TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS shadow_tiles (
+  dataset_id TEXT NOT NULL REFERENCES shadow_sets(dataset_id) ON DELETE CASCADE,
+  level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, z INTEGER NOT NULL,
+  voxels INTEGER NOT NULL, etag TEXT NOT NULL, bytes BLOB NOT NULL,
+  PRIMARY KEY (dataset_id, level, x, y, z));
 )sql";
 
-// Stores written before jobs.attempts existed get the column (their jobs count as never started).
+// Stores written before jobs.attempts existed get the column (their jobs count as never started);
+// before jobs.kind, theirs are all ingests.
 Status Migrate(sqlite3* db) {
-  Statement columns(db, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'attempts'");
-  ASSIGN_OR_RETURN(const bool has_attempts, columns.Next());
-  if (has_attempts) return Status::Ok();
-  return Exec(db, "ALTER TABLE jobs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0");
+  for (const auto& [column, sql] : {std::pair{"attempts", "ALTER TABLE jobs ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0"},
+                                    std::pair{"kind", "ALTER TABLE jobs ADD COLUMN kind TEXT NOT NULL DEFAULT 'ingest'"}}) {
+    Statement columns(db, "SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?");
+    ASSIGN_OR_RETURN(const bool has_column, columns.Bind(column).Next());
+    if (!has_column) RETURN_IF_ERROR(Exec(db, sql));
+  }
+  return Status::Ok();
 }
 
 StatusOr<sqlite3*> OpenConnection(const std::filesystem::path& file, int busy_timeout_ms) {
@@ -64,17 +76,33 @@ JobRecord ReadJob(const Statement& s) {
   j.created = s.Real(10);
   j.updated = s.Real(11);
   j.attempts = static_cast<int>(s.Int(12));
+  j.kind = s.Text(13);
   return j;
 }
 
 constexpr const char* kJobColumns =
     "SELECT id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, params, created, updated, "
-    "attempts FROM jobs";
+    "attempts, kind FROM jobs";
 
 // Dataset metadata as stored; a row that is not JSON is reported, not thrown.
 StatusOr<nlohmann::json> ParseMeta(const std::string& text) {
   auto meta = ParseJson(text);
   if (!meta.ok()) return Corrupt("a dataset's stored metadata is not JSON: " + meta.status().message());
+  return meta;
+}
+
+// A dataset's metadata with its shadow set's summary (or null): the columns ReadDataset() takes.
+constexpr const char* kDatasetColumns =
+    "SELECT d.meta, s.summary FROM datasets d LEFT JOIN shadow_sets s ON s.dataset_id = d.id";
+
+StatusOr<nlohmann::json> ReadDataset(const Statement& s) {
+  ASSIGN_OR_RETURN(nlohmann::json meta, ParseMeta(s.Text(0)));
+  meta["shadows"] = nullptr;
+  if (!s.IsNull(1)) {
+    auto summary = ParseJson(s.Text(1));
+    if (!summary.ok()) return Corrupt("a dataset's stored shadow summary is not JSON: " + summary.status().message());
+    meta["shadows"] = std::move(*summary);
+  }
   return meta;
 }
 
@@ -113,10 +141,10 @@ Status Store::CreateJob(const JobRecord& job) {
   std::lock_guard lock(write_mutex_);
   Statement s(writer_,
               "INSERT INTO jobs (id, state, stage, percent, points_in, voxels_out, dataset_id, error, upload_path, params, "
-              "created, updated, attempts) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)");
+              "created, updated, attempts, kind) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const double now = Now();
   return s.Bind(job.id, job.state, job.stage, job.percent, job.points_in, job.voxels_out, job.dataset_id, job.error,
-                job.upload_path, DumpJson(job.params), now, now, job.attempts)
+                job.upload_path, DumpJson(job.params), now, now, job.attempts, job.kind)
       .Run();
 }
 
@@ -208,22 +236,22 @@ Status Store::CommitDataset(const std::string& job_id, const std::string& datase
 
 StatusOr<std::optional<nlohmann::json>> Store::GetDataset(const std::string& id) {
   std::lock_guard lock(read_mutex_);
-  Statement s(reader_, "SELECT meta FROM datasets WHERE id=?");
+  Statement s(reader_, (std::string(kDatasetColumns) + " WHERE d.id=?").c_str());
   s.Bind(id);
   ASSIGN_OR_RETURN(const bool found, s.Next());
   if (!found) return std::optional<nlohmann::json>();
-  ASSIGN_OR_RETURN(nlohmann::json meta, ParseMeta(s.Text(0)));
+  ASSIGN_OR_RETURN(nlohmann::json meta, ReadDataset(s));
   return std::optional<nlohmann::json>(std::move(meta));
 }
 
 StatusOr<std::vector<nlohmann::json>> Store::ListDatasets() {
   std::lock_guard lock(read_mutex_);
   std::vector<nlohmann::json> out;
-  Statement s(reader_, "SELECT meta FROM datasets ORDER BY created");
+  Statement s(reader_, (std::string(kDatasetColumns) + " ORDER BY d.created").c_str());
   for (;;) {
     ASSIGN_OR_RETURN(const bool row, s.Next());
     if (!row) break;
-    ASSIGN_OR_RETURN(nlohmann::json meta, ParseMeta(s.Text(0)));
+    ASSIGN_OR_RETURN(nlohmann::json meta, ReadDataset(s));
     out.push_back(std::move(meta));
   }
   return out;

@@ -1,9 +1,11 @@
-// The embedded store: one SQLite file (WAL) holding jobs, datasets and their tiles.
+// The embedded store: one SQLite file (WAL) holding jobs, datasets, their tiles and shadow sets.
 //
 // Contract: a dataset and all its tiles are written in one transaction together with its job's
 // "done" state, so a reader sees a dataset complete or not at all, and a crash at any point leaves
 // either nothing or everything. Tiles are immutable; their strong ETag (XXH3 of the bytes) is
-// computed once at commit. Safe to call from any thread (one connection for writes, one for reads,
+// computed once at commit. A dataset's shadow set (its summary and every tile's layer) is replaced
+// in one transaction with its job's "done" state, so readers see the old set or the new, never a
+// mix; deleting the dataset deletes its set (foreign keys, ON DELETE CASCADE). Safe to call from any thread (one connection for writes, one for reads,
 // each behind its own mutex; WAL lets them proceed together).
 //
 // Errors: kResourceLimit when another process holds the store's lock longer than the busy timeout
@@ -30,22 +32,29 @@ namespace pointdag::server {
 
 struct JobRecord {
   std::string id;
+  std::string kind = "ingest";  // ingest (an upload), shadows (a dataset's shadow set)
   std::string state = "queued";  // queued, running, done, failed
   std::string stage = "queued";
   double percent = 0;
   uint64_t points_in = 0;
   uint64_t voxels_out = 0;
-  std::string dataset_id;
+  std::string dataset_id;  // ingest: the dataset made, once done; shadows: the dataset shaded
   std::string error;
   std::string upload_path;
   int attempts = 0;  // runs started, counted before each starts: a run that crashed the process counts
-  nlohmann::json params = nlohmann::json::object();  // name, voxel, epsg, quality
+  nlohmann::json params = nlohmann::json::object();  // ingest: name, voxel, epsg, quality; shadows: the request
   double created = 0, updated = 0;                    // Unix seconds
 };
 
 struct StoredTile {
   std::string etag;  // with quotes, as sent
   std::vector<uint8_t> bytes;
+};
+
+struct ShadowTile {
+  TileKey key;
+  uint64_t voxels = 0;
+  std::vector<uint8_t> bytes;  // a layer (proto/SHADOW_FORMAT.md §2)
 };
 
 struct HierarchyEntry {
@@ -80,6 +89,7 @@ class Store {
   // One transaction: the dataset row, every tile, and the job marked done with the dataset's id.
   Status CommitDataset(const std::string& job_id, const std::string& dataset_id, const std::string& name,
                        const nlohmann::json& meta, const TileSet& tiles);
+  // The dataset's metadata with "shadows": its shadow set's summary, or null.
   StatusOr<std::optional<nlohmann::json>> GetDataset(const std::string& id);
   StatusOr<std::vector<nlohmann::json>> ListDatasets();
   // One transaction: the dataset and its tiles go, its job's stage becomes "deleted". False: no such dataset.
@@ -90,6 +100,19 @@ class Store {
   // level returned that have children of their own (the next pages to ask for).
   StatusOr<std::vector<HierarchyEntry>> TilesBelow(const std::string& dataset_id, const TileKey& key, int depth,
                                                    std::vector<TileKey>& more_below);
+
+  // ---- Shadow sets (store_shadows.cc) ----
+  // Creates a shadows job unless one for the same dataset is queued or running: then nothing is
+  // created and that job's id is returned (one check and insert in one transaction).
+  StatusOr<std::optional<std::string>> CreateShadowJob(const JobRecord& job);
+  // One transaction: the dataset's shadow set (if any) goes, the new summary and every layer come,
+  // and the job is done. kInvalidArgument when the dataset is gone (deleted meanwhile).
+  Status CommitShadows(const std::string& job_id, const std::string& dataset_id, const nlohmann::json& summary,
+                       const std::vector<ShadowTile>& layers);
+  StatusOr<std::optional<nlohmann::json>> GetShadows(const std::string& dataset_id);
+  StatusOr<std::optional<StoredTile>> GetShadowTile(const std::string& dataset_id, const TileKey& key);
+  // False: the dataset has no shadow set.
+  StatusOr<bool> DeleteShadows(const std::string& dataset_id);
 
  private:
   Store() = default;

@@ -40,7 +40,8 @@ const std::map<std::string, std::pair<double, double>> kVoxelSizes = {
     {"tiny_1.2-with-color_1065pts.las", {8.0, 4.0}},
 };
 
-// Resident set size now and its high-water mark, in bytes (from /proc/self/status).
+}  // namespace
+
 std::pair<uint64_t, uint64_t> RssAndPeak() {
   std::ifstream status("/proc/self/status");
   std::string key;
@@ -52,6 +53,8 @@ std::pair<uint64_t, uint64_t> RssAndPeak() {
   }
   return {rss, peak};
 }
+
+namespace {
 
 nlohmann::json RunCase(const std::filesystem::path& scan, double voxel, uint64_t max_points_in_memory) {
   // Warm up on the same file at the coarsest grid so that code pages are in, give the heap back,

@@ -6,6 +6,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 namespace pointdag {
 
@@ -31,6 +32,8 @@ int RunVersusBench(const BenchOptions& options);  // tools/versus_bench.cc
 int RunCorpusBench(const BenchOptions& options);  // tools/corpus_bench.cc
 
 // Shared by the benchmarks.
+// Resident set size now and its high-water mark, in bytes (from /proc/self/status).
+std::pair<uint64_t, uint64_t> RssAndPeak();
 // Runs one case in a forked child, so each case's peak RSS is its own; its JSON comes back.
 nlohmann::json RunIsolated(const std::string& scan_name, const std::function<nlohmann::json()>& run_case);
 // IngestScan as pointdagd runs it on one scan: stage times, points/s, sizes, peak RSS.

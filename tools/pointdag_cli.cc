@@ -3,8 +3,10 @@
 //   pointdag decode IN.pdag -o OUT.ply
 //   pointdag info IN.pdag [--json]
 //   pointdag compare IN (--voxel SIZE | --depth D) [--json]
-//   pointdag bench [--data DIR] [--json]
+//   pointdag bench [--data DIR] [--json]    (--shadow [DIR]: shadow_bench.h)
 //   pointdag export IN.pdag|URL --3dtiles DIR
+//   pointdag shadow IN (--direction X,Y,Z | --time ISO8601 [--until ISO8601 --samples N]) (--voxel S | --depth D)
+//                   [--json] [-o OUT.ply|OUT.pdsh]   (shadow_command.h)
 // Exit codes: 0 ok, 1 bad input (message on stderr), 2 usage.
 #include <unistd.h>
 
@@ -25,6 +27,8 @@
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
 #include "progress.h"
+#include "shadow_bench.h"
+#include "shadow_command.h"
 
 namespace pointdag {
 namespace {
@@ -90,11 +94,15 @@ StatusOr<ColorEncodeOptions> MakeColorOptions(const ColorChoice& choice) {
   return options;
 }
 
-int RunFetch(const std::string& url, std::optional<int> level, const std::string& output) {
+int RunFetch(const std::string& url, std::optional<int> level, const std::string& output, bool shadows) {
   const auto start = std::chrono::steady_clock::now();
-  auto fetched = client::FetchDataset(url, level);
+  auto fetched = client::FetchDataset(url, level, {}, {}, shadows);
   if (!fetched.ok()) return Fail(fetched.status());
-  if (Status s = WriteVoxelsPly(output, fetched->grid); !s.ok()) return Fail(s);
+  // --shadows: each voxel's lit fraction (its shadow layer's byte / 255) as the property `light`.
+  std::vector<float> light(fetched->light.size());
+  std::transform(fetched->light.begin(), fetched->light.end(), light.begin(), [](uint8_t b) { return static_cast<float>(b) / 255.0f; });
+  const auto scalar = shadows ? std::optional<PlyScalar>(PlyScalar{"light", light}) : std::nullopt;
+  if (Status s = WriteVoxelsPly(output, fetched->grid, scalar); !s.ok()) return Fail(s);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "%s: level %d, %zu tiles (%llu bytes), %zu voxels of %.6g in %.2f s\n", output.c_str(), fetched->level,
                fetched->tiles, static_cast<unsigned long long>(fetched->tile_bytes), fetched->grid.morton.size(),
@@ -299,11 +307,16 @@ int Main(int argc, char** argv) {
   fetch->add_option("url", url, "http://HOST:PORT/v1/datasets/ID")->required();
   fetch->add_option("--level", level, "level of detail (0 = coarsest; default: the finest)")->check(CLI::NonNegativeNumber);
   fetch->add_option("-o,--output", output, "output .ply (voxel centres in the dataset's frame + RGB)")->required();
+  bool fetch_shadows = false;
+  fetch->add_flag("--shadows", fetch_shadows, "also the dataset's shadow layers: a float property `light` (lit fraction 0..1)");
 
   std::string tiles3d_dir;
   auto* export_cmd = app.add_subcommand("export", "a dataset (a .pdag, or a pointdagd URL) as 3D Tiles 1.1 static files");
   export_cmd->add_option("input", input, "IN.pdag or http://HOST:PORT/v1/datasets/ID")->required();
   export_cmd->add_option("--3dtiles", tiles3d_dir, "output folder: tileset.json and {level}/{x}/{y}/{z}.glb")->required();
+
+  ShadowCommand shadow_command;
+  auto* shadow = AddShadowCommand(app, shadow_command);
 
   BenchOptions bench_options;
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
@@ -315,6 +328,11 @@ int Main(int argc, char** argv) {
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
   bench->add_flag("--laz", bench_options.laz, "LAZ decoding of DATA/laz: points/s on one core and all; LAZ vs LAS ingest");
   bench->add_flag("--versus", bench_options.versus, "ours, Draco and G-PCC side by side: geometry, colors at 34/38/42 dB, lossless totals");
+  std::string shadow_bench_dir;
+  auto* shadow_bench = bench->add_option("--shadow", shadow_bench_dir,
+                                         "shadow DAGs of every scan in DIR (default: --data) at two resolutions: sizes "
+                                         "against the dense grid and a shadow map, build time, memory, queries/s")
+                           ->expected(0, 1);
   auto* corpus = bench->add_option("--corpus", bench_options.corpus,
                                    "nightly benchmark: a corpus TOML file or a folder of scans (docs/nightly.md)")
                      ->check(CLI::ExistingPath);
@@ -370,9 +388,13 @@ int Main(int argc, char** argv) {
   if (decode->parsed()) return RunDecode(input, output);
   if (info->parsed()) return RunInfo(input, json);
   if (compare->parsed()) return RunCompare(input, grid, json);
+  if (bench->parsed() && shadow_bench->count() > 0) {
+    return RunShadowBench(shadow_bench_dir.empty() ? bench_options.data_dir : shadow_bench_dir, std::cout);
+  }
   if (bench->parsed()) return RunBench(bench_options);
-  if (fetch->parsed()) return RunFetch(url, level, output);
+  if (fetch->parsed()) return RunFetch(url, level, output, fetch_shadows);
   if (export_cmd->parsed()) return RunExport(input, tiles3d_dir);
+  if (shadow->parsed()) return RunShadowCommand(shadow_command);
   return 2;
 }
 

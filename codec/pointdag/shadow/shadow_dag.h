@@ -29,6 +29,9 @@ namespace pointdag {
 struct ShadowBuildOptions {
   int extra_levels = 2;        // light_depth = dag.depth + extra_levels
   bool relax_undefined = true;  // false: undefined cells count as lit (for measuring the relaxation)
+  // With relax_undefined: undefined cells of mixed bricks and nodes are chosen to repeat a brick or
+  // node already built where one fits (Kämpe et al. 2015); false: they become lit.
+  bool match_undefined = true;
   // Bits of the subtree hash that are kept; tests narrow it to force collisions (answers must not change).
   uint64_t hash_mask = ~uint64_t{0};
 };
@@ -41,6 +44,7 @@ struct ShadowDagStats {
   uint64_t shadow_map_bytes = 0;   // a plain shadow map of the same resolution: 4-byte depth per texel
   int light_depth = 0;
   double build_seconds = 0;
+  uint64_t build_peak_bytes = 0;   // own accounting: the largest the build's arrays got together
 };
 
 class ShadowDag {
@@ -59,6 +63,7 @@ class ShadowDag {
   static StatusOr<ShadowDag> Deserialize(std::span<const uint8_t> bytes);
 
   struct Impl;
+  explicit ShadowDag(std::unique_ptr<Impl> impl);
 
  private:
   std::unique_ptr<Impl> impl_;

@@ -28,10 +28,13 @@ namespace pointdag {
 bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 3>& travel,
                   const std::array<uint32_t, 3>& cell);
 
-// One byte per voxel, 1 = shadowed, 0 = lit, in Morton order.
-StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light);
+// One byte per voxel, 1 = shadowed, 0 = lit, in Morton order. kInvalidArgument for a light whose
+// travel is NaN, infinite or zero (unless below the horizon). `threads`: worker threads, 0 = one
+// per core; the answer never depends on it.
+StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads = 0);
 
-// Sun hours: per voxel, how many of `lights` light it (0..lights.size(), at most 65535 lights).
-StatusOr<std::vector<uint16_t>> LitSampleCounts(const Svdag& dag, std::span<const Light> lights);
+// Sun hours: per voxel, how many of `lights` light it (0..lights.size(), at most 65535 lights,
+// else kInvalidArgument; a light below the horizon lights nothing).
+StatusOr<std::vector<uint16_t>> LitSampleCounts(const Svdag& dag, std::span<const Light> lights, int threads = 0);
 
 }  // namespace pointdag

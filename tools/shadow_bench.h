@@ -1,0 +1,14 @@
+// `pointdag bench --shadow DIR` (issue #16): the light-space shadow DAG on every scan of DIR at two
+// resolutions, one sun-like light: sizes against the dense grid and a plain shadow map, what each
+// relaxation step of the undefined cells gains, build time and memory, queries per second.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+
+namespace pointdag {
+
+// Writes a Markdown table to `out`; 0 when every scan was measured, 1 otherwise.
+int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out);
+
+}  // namespace pointdag
