@@ -45,7 +45,8 @@ function median(values) {
 
 // Off and on: the same frame but for the shading. Returns the measures: pixels the shading made
 // brighter, the mean luminance of the scan's pixels (not the background) off and on, and at the
-// probed voxels' pixels the median share of luminance kept, for shadowed (light 0) and lit (255) voxels.
+// probed voxels' pixels the share whose luminance kept is the factor of their light (within 0.05),
+// and the median share kept for shadowed (light 0) and lit (255) voxels.
 export function compareShading(off, on, probe) {
   assert.equal(on.width, off.width);
   let brighter = 0;
@@ -62,16 +63,23 @@ export function compareShading(off, on, probe) {
       sumOn += b;
     }
   }
-  // At each probed voxel's pixel: how much the shading kept of its luminance (well-lit pixels only).
+  // At each probed voxel's pixel: how much the shading kept of its luminance (well-lit pixels only),
+  // and how far that is from the factor its light asks for (a nearer voxel may cover the pixel).
   const ratios = { shadowed: [], lit: [] };
+  let matching = 0;
+  let measured = 0;
   for (const { x, y, light } of probe) {
     const i = 4 * (Math.floor(y) * off.width + Math.floor(x));
     const a = luminance(off.data, i);
     if (a < 40) continue;
-    if (light === 0) ratios.shadowed.push(luminance(on.data, i) / a);
-    else if (light === 255) ratios.lit.push(luminance(on.data, i) / a);
+    const kept = luminance(on.data, i) / a;
+    measured++;
+    if (Math.abs(kept - (AMBIENT + ((1 - AMBIENT) * light) / 255)) < 0.05) matching++;
+    if (light === 0) ratios.shadowed.push(kept);
+    else if (light === 255) ratios.lit.push(kept);
   }
   return {
+    matchingShare: matching / measured,
     brighterPixels: brighter,
     meanOff: sumOff / foreground,
     meanOn: sumOn / foreground,

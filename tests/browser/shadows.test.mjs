@@ -69,19 +69,16 @@ async function turnOnAndCheck(page, name, t) {
   const m = compareShading(off, onShot, probe);
   const shadowedShare = probe.filter((p) => p.light === 0).length / probe.length;
   t.diagnostic(`${name}: ${probe.length} probed voxels, ${(shadowedShare * 100).toFixed(1)}% shadowed; ${JSON.stringify(m)}; ` +
-    `${on.shadows.bytesFetched} layer bytes for ${on.tilesOnScreen} tiles`);
-  // The light direction gives both: shadowed and lit voxels in view.
-  assert.ok(shadowedShare > 0.05 && shadowedShare < 0.95, `shadowed share ${shadowedShare}`);
-  assert.ok(m.shadowedProbes >= 50 && m.litProbes >= 50, JSON.stringify(m));
-  // Where the layer says shadowed the pixel keeps the ambient share; where lit, all of it.
-  assert.ok(Math.abs(m.shadowedKept - AMBIENT) < 0.06, `shadowed voxels kept ${m.shadowedKept} of their luminance`);
-  assert.ok(m.litKept > 0.97, `lit voxels kept ${m.litKept} of their luminance`);
+    `${on.shadows.bytesFetched} layer bytes fetched, ${on.tilesOnScreen} tiles on screen`);
+  // Nearly every probed voxel's pixel is its colour times the factor of its light (the others are
+  // covered by a nearer voxel).
+  assert.ok(m.matchingShare > 0.9, `only ${m.matchingShare} of the probed pixels have their voxel's shading`);
   assert.equal(m.brighterPixels, 0, 'the shading brightened pixels');
-  // The scan as a whole darker: by at least a quarter of what its shadowed share of voxels implies
-  // (shadowed voxels are hidden more often than lit ones: under the canopy that shadows them).
-  const drop = (1 - AMBIENT) * shadowedShare;
-  assert.ok(m.meanOn < m.meanOff * (1 - drop / 4), `mean luminance ${m.meanOff} -> ${m.meanOn}, ${shadowedShare} of voxels shadowed`);
-  return { off, onShot, on };
+  // The scan as a whole darker: by at least a quarter of what its voxels' light implies (shadowed
+  // voxels are hidden more often than lit ones: under the canopy that shadows them).
+  const drop = probe.reduce((sum, p) => sum + (1 - AMBIENT) * (1 - p.light / 255), 0) / probe.length;
+  assert.ok(m.meanOn < m.meanOff * (1 - drop / 4), `mean luminance ${m.meanOff} -> ${m.meanOn}, expected drop ${drop}`);
+  return { off, onShot, on, m, shadowedShare };
 }
 
 test('after a shadow job the page shades shadowed voxels when the toggle is on, and only then', async (t) => {
@@ -89,7 +86,13 @@ test('after a shadow job the page shades shadowed voxels when the toggle is on, 
   shadows = dataset.shadows;
   assert.ok(shadows, `no shadows in the metadata after the job: ${JSON.stringify(dataset)}`);
   await page.goto(`${daemon.url}/datasets/${datasetId}`);
-  const { off, onShot, on } = await turnOnAndCheck(page, 'shadows-pdag', t);
+  const { off, onShot, on, m, shadowedShare } = await turnOnAndCheck(page, 'shadows-pdag', t);
+  // One direction: shadowed and lit voxels in view; where the layer says shadowed the pixel keeps
+  // the ambient share of its luminance, where lit, all of it.
+  assert.ok(shadowedShare > 0.05 && shadowedShare < 0.95, `shadowed share ${shadowedShare}`);
+  assert.ok(m.shadowedProbes >= 50 && m.litProbes >= 50, JSON.stringify(m));
+  assert.ok(Math.abs(m.shadowedKept - AMBIENT) < 0.03, `shadowed voxels kept ${m.shadowedKept} of their luminance`);
+  assert.ok(m.litKept > 0.97, `lit voxels kept ${m.litKept} of their luminance`);
 
   await setShadows(page, false);
   const offAgain = await sceneShot(page, 'shadows-pdag-off-again');
@@ -150,7 +153,27 @@ test('a tile whose layer is missing or corrupt is drawn unshaded, and the view s
     assert.equal(state.shadows.tilesShaded, state.tilesOnScreen - 2);
     // The browser reports the 404 itself; nothing else went wrong.
     assert.deepEqual(page.errors.filter((e) => !/status of 404/.test(e)), []);
+    page.errors.length = 0; // the 404 was asked for
   } finally {
     await page.unrouteAll();
   }
+});
+
+test('sun hours: the legend shows the span, and each voxel is shaded by its share of the sun', async (t) => {
+  assert.ok(shadows, 'the shadow job did not run');
+  // Autzen (Oregon, UTC-7) from 08:00 to 18:00 local time on the solstice: 6 suns, 10 hours.
+  const dataset = await computeShadows(daemon.url, datasetId, { time: '2024-06-21T15:00:00Z', until: '2024-06-22T01:00:00Z', samples: 6 });
+  assert.equal(dataset.shadows.kind, 'sun_hours');
+  await page.goto(`${daemon.url}/datasets/${datasetId}`);
+  const legend = page.locator('#shadow-legend');
+  assert.equal(await legend.isHidden(), true, 'the legend shows while shadows are off');
+  const { m } = await turnOnAndCheck(page, 'shadows-sun-hours', t);
+  assert.equal(await legend.isVisible(), true);
+  assert.match(await legend.textContent(), /Sun hours \(6 samples\).*0 h.*10 h/);
+  const lights = new Set((await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), PROBES)).map((p) => p.light));
+  assert.ok(lights.size > 2, `only lights ${[...lights]}: sun hours give shares between 0 and 255`);
+  await setShadows(page, false);
+  assert.equal(await legend.isHidden(), true);
+  t.diagnostic(`lights seen: ${[...lights].sort((a, b) => a - b).join(' ')}; ${JSON.stringify(m)}`);
+  assert.deepEqual(page.errors, []);
 });
