@@ -4,6 +4,8 @@
 import assert from 'node:assert/strict';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
+import { decodeShadowLayer } from '../../web/src/decoder/shadow_layer.js';
+import { listTiles } from '../web/lib/pointdagd.mjs';
 import { requireWebModule } from './browser.mjs';
 import { BACKGROUND } from './screenshot_check.mjs';
 
@@ -19,6 +21,20 @@ export async function sceneShot(page, name) {
   await hide.evaluate((style) => style.remove()); // the toggle must stay clickable
   if (process.env.POINTDAG_SCREENSHOT_DIR) writeFileSync(join(process.env.POINTDAG_SCREENSHOT_DIR, `${name}.png`), png);
   return requireWebModule('pngjs').PNG.sync.read(png);
+}
+
+// The viewer's probe of visible voxels ({x, y, tile, index}), each with its light as the daemon's
+// layer of its tile says (fetched and decoded here, not taken from the page).
+export async function probeWithLight(page, baseUrl, datasetId, limit) {
+  const probe = await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), limit);
+  const voxels = new Map((await listTiles(baseUrl, datasetId)).map((t) => [`${t.level}/${t.x}/${t.y}/${t.z}`, t.voxels]));
+  const layers = new Map();
+  for (const tile of new Set(probe.map((p) => p.tile))) {
+    const r = await fetch(`${baseUrl}/v1/datasets/${datasetId}/shadows/tiles/${tile}`);
+    assert.equal(r.status, 200, `layer ${tile}`);
+    layers.set(tile, decodeShadowLayer(new Uint8Array(await r.arrayBuffer()), voxels.get(tile)).light);
+  }
+  return probe.map((p) => ({ ...p, light: layers.get(p.tile)[p.index] }));
 }
 
 // Waits until the view is complete and every drawn tile has its layer settled (shaded or missing);

@@ -9,7 +9,7 @@ import { scan } from '../web/lib/config.mjs';
 import { computeShadows, ingest } from '../web/lib/pointdagd.mjs';
 import { openSession } from './browser.mjs';
 import { checkDrawn } from './drawn_check.mjs';
-import { AMBIENT, compareShading, differingPixels, sceneShot, setShadows, waitShadowsSettled } from './shadow_check.mjs';
+import { AMBIENT, compareShading, differingPixels, probeWithLight, sceneShot, setShadows, waitShadowsSettled } from './shadow_check.mjs';
 
 // From above at 56 degrees (steeper than 45: flat ground does not shadow itself at voxel scale),
 // so that Autzen's trees and buildings cast shadows on the ground beside lit ground.
@@ -65,7 +65,7 @@ async function turnOnAndCheck(page, name, t) {
   assert.equal(on.shadows.missing, 0);
   assert.equal(on.tilesFetched, before.tilesFetched, 'turning shadows on fetched tiles again');
   const onShot = await sceneShot(page, `${name}-on`);
-  const probe = await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), PROBES);
+  const probe = await probeWithLight(page, daemon.url, datasetId, PROBES);
   const m = compareShading(off, onShot, probe);
   const shadowedShare = probe.filter((p) => p.light === 0).length / probe.length;
   t.diagnostic(`${name}: ${probe.length} probed voxels, ${(shadowedShare * 100).toFixed(1)}% shadowed; ${JSON.stringify(m)}; ` +
@@ -170,7 +170,7 @@ test('sun hours: the legend shows the span, and each voxel is shaded by its shar
   const { m } = await turnOnAndCheck(page, 'shadows-sun-hours', t);
   assert.equal(await legend.isVisible(), true);
   assert.match(await legend.textContent(), /Sun hours \(6 samples\).*0 h.*10 h/);
-  const lights = new Set((await page.evaluate((n) => window.pointdagViewer.shadowProbe(n), PROBES)).map((p) => p.light));
+  const lights = new Set((await probeWithLight(page, daemon.url, datasetId, PROBES)).map((p) => p.light));
   assert.ok(lights.size > 2, `only lights ${[...lights]}: sun hours give shares between 0 and 255`);
   await setShadows(page, false);
   assert.equal(await legend.isHidden(), true);

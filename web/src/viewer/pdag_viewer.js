@@ -144,7 +144,7 @@ export class PdagViewer {
     };
   }
 
-  // Test hook: up to `limit` drawn voxels of shaded tiles, with the CSS pixel of their centre and their light.
+  // Test hook: up to `limit` visible voxels of shaded tiles, with the CSS pixel of their centre.
   shadowProbe(limit) {
     return probeVoxelLight(this.drawn, this.view, limit);
   }

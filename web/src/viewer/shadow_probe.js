@@ -1,12 +1,12 @@
 // Test hook of the shadow toggle (window.pointdagViewer.shadowProbe): where some visible voxels of
-// shaded tiles land on screen, with their light, so a test can compare those pixels with the shading
-// on and off. Visible: the nearest voxel at its centre pixel, by a depth buffer of every drawn
+// shaded tiles land on screen, named by tile and index, so a test can compare those pixels, with the
+// shading on and off, with what the tile's layer says of the voxel. Visible: the nearest voxel at its centre pixel, by a depth buffer of every drawn
 // voxel's square as the GPU draws it (gl_PointSize = size · (height / 2) / depth, one depth per
 // square). Voxels are taken at an even stride over the shaded tiles, `limit` at most.
 import * as THREE from 'three';
 
 // drawn: [{points, voxels}] (TileNodes, or the 3D Tiles view's stand-ins).
-// -> [{x, y, light}]: CSS pixels of the canvas.
+// -> [{x, y, tile: 'L/X/Y/Z', index}]: CSS pixels of the canvas; index in the tile's voxel order.
 export function probeVoxelLight(drawn, view, limit) {
   const width = view.container.clientWidth;
   const height = view.container.clientHeight;
@@ -49,10 +49,9 @@ export function probeVoxelLight(drawn, view, limit) {
   const found = [];
   for (const node of shaded) {
     withNode(node);
-    const light = node.points.geometry.attributes.shadowLight.array;
     for (let i = 0; i < node.voxels; i += stride) {
       const v = place(node, i);
-      if (v && depth[Math.floor(v.y) * width + Math.floor(v.x)] >= v.z) found.push({ x: v.x, y: v.y, light: light[i] });
+      if (v && depth[Math.floor(v.y) * width + Math.floor(v.x)] >= v.z) found.push({ x: v.x, y: v.y, tile: node.path(), index: i });
     }
   }
   return found;
