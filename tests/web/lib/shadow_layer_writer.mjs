@@ -1,5 +1,5 @@
 // Writers of per-tile shadow layers (proto/SHADOW_FORMAT.md §2) for the tests: a valid layer of any
-// light values (maximal runs), and a frame with a correct CRC-32C around any run bytes, so that a
+// light values (version 1: maximal runs; version 2: runs of 2 or more, literals between), and a frame with a correct CRC-32C around any run bytes, so that a
 // hostile case reaches the check it aims at rather than the CRC.
 import { crc32c } from '../../../web/src/decoder/crc32c.js';
 import { varint } from './pdag_writer.mjs';
@@ -30,6 +30,30 @@ export function frameShadowLayer(runs, { magic = 'PDSH', version = 1, kind = 0, 
   return out;
 }
 
-export function encodeShadowLayer(light, { kind = 0, samples = 1 } = {}) {
-  return frameShadowLayer(shadowRuns(light), { kind, samples, count: light.length });
+// Version 2's tokens: varint 2(len - 1) then the value for a run, varint 2(len - 1) + 1 then the bytes for literals.
+export function shadowTokens(light) {
+  const out = [];
+  let literals = [];
+  const flush = () => {
+    if (literals.length) out.push(...varint(2 * (literals.length - 1) + 1), ...literals);
+    literals = [];
+  };
+  for (let i = 0; i < light.length;) {
+    let j = i + 1;
+    while (j < light.length && light[j] === light[i]) ++j;
+    if (j - i >= 2) {
+      flush();
+      out.push(...varint(2 * (j - i - 1)), light[i]);
+    } else {
+      literals.push(light[i]);
+    }
+    i = j;
+  }
+  flush();
+  return Uint8Array.from(out);
+}
+
+export function encodeShadowLayer(light, { kind = 0, samples = 1, version = 1 } = {}) {
+  const body = version === 1 ? shadowRuns(light) : shadowTokens(light);
+  return frameShadowLayer(body, { kind, samples, count: light.length, version });
 }
