@@ -182,6 +182,13 @@ TEST(ShadowCli, PdagInputAndShadowDagOutput) {
   auto shadow = ShadowDag::Deserialize(*bytes);
   ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
   EXPECT_EQ(shadow->stats().light_depth, from_pdag["light_depth"].get<int>());
+  // Without --georeference a .pdag keeps the scan's own axes: no sun for it.
+  const std::string plain = (dir / "plain.pdag").string();
+  ASSERT_EQ(Cli("encode " + Scan(kGeoScan) + " --depth 6 -o " + plain, dir).exit_code, 0);
+  const CliRun no_sun = Cli("shadow " + plain + " --time 2026-06-21T13:00:00-07:00", dir);
+  EXPECT_EQ(no_sun.exit_code, 1);
+  EXPECT_NE(no_sun.err.find("georeferenced"), std::string::npos) << no_sun.err;
+  EXPECT_EQ(Cli("shadow " + plain + " --direction 0,0,-1", dir).exit_code, 0);
   // A .pdag has its own grid; and sun hours do not fit a one-light .pdsh.
   EXPECT_EQ(Cli("shadow " + pdag + " --depth 6 --direction 0,0,-1", dir).exit_code, 2);
   EXPECT_EQ(Cli("shadow " + pdag + " --time 2026-06-21T12:00:00Z --until 2026-06-21T20:00:00Z --samples 3 -o x.pdsh", dir)
