@@ -195,5 +195,23 @@ TEST(ShadowCli, PdagInputAndShadowDagOutput) {
                 .exit_code, 2);
 }
 
+// `bench --shadow DIR` reaches RunShadowBench (shadow_bench.h): a table row per scan and resolution.
+TEST(ShadowCli, BenchShadowRunsOnAFolder) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  std::filesystem::create_directories(dir / "scans");
+  std::filesystem::copy_file(DataDir() / kLocalScan, dir / "scans" / kLocalScan);
+  const CliRun run = Cli("bench --shadow " + (dir / "scans").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  size_t rows = 0;
+  for (size_t at = run.out.find(std::string("| ") + kLocalScan); at != std::string::npos;
+       at = run.out.find(std::string("| ") + kLocalScan, at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, 2u) << run.out;
+  std::filesystem::create_directories(dir / "empty");
+  EXPECT_EQ(Cli("bench --shadow " + (dir / "empty").string(), dir).exit_code, 1);
+}
+
 }  // namespace
 }  // namespace pointdag
