@@ -68,7 +68,8 @@ StatusOr<LightPlan> PlanLights(const ShadowCommand& c, const ShadowInput& input,
   }
   if (!input.georeferenced) {
     return InvalidArgument("--time needs a georeferenced dataset, and " + c.input +
-                           " has no CRS (its axes are its own); give --direction X,Y,Z in its axes instead");
+                           " is not (a scan without a CRS, or a .pdag encoded without --georeference); "
+                           "give --direction X,Y,Z in its axes instead");
   }
   plan.from = from;
   plan.until = until;

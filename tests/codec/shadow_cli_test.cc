@@ -182,10 +182,35 @@ TEST(ShadowCli, PdagInputAndShadowDagOutput) {
   auto shadow = ShadowDag::Deserialize(*bytes);
   ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
   EXPECT_EQ(shadow->stats().light_depth, from_pdag["light_depth"].get<int>());
+  // Without --georeference a .pdag keeps the scan's own axes: no sun for it.
+  const std::string plain = (dir / "plain.pdag").string();
+  ASSERT_EQ(Cli("encode " + Scan(kGeoScan) + " --depth 6 -o " + plain, dir).exit_code, 0);
+  const CliRun no_sun = Cli("shadow " + plain + " --time 2026-06-21T13:00:00-07:00", dir);
+  EXPECT_EQ(no_sun.exit_code, 1);
+  EXPECT_NE(no_sun.err.find("georeferenced"), std::string::npos) << no_sun.err;
+  EXPECT_EQ(Cli("shadow " + plain + " --direction 0,0,-1", dir).exit_code, 0);
   // A .pdag has its own grid; and sun hours do not fit a one-light .pdsh.
   EXPECT_EQ(Cli("shadow " + pdag + " --depth 6 --direction 0,0,-1", dir).exit_code, 2);
   EXPECT_EQ(Cli("shadow " + pdag + " --time 2026-06-21T12:00:00Z --until 2026-06-21T20:00:00Z --samples 3 -o x.pdsh", dir)
                 .exit_code, 2);
+}
+
+// `bench --shadow DIR` reaches RunShadowBench (shadow_bench.h): a table row per scan and resolution.
+TEST(ShadowCli, BenchShadowRunsOnAFolder) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  std::filesystem::create_directories(dir / "scans");
+  std::filesystem::copy_file(DataDir() / kLocalScan, dir / "scans" / kLocalScan);
+  const CliRun run = Cli("bench --shadow " + (dir / "scans").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  size_t rows = 0;
+  for (size_t at = run.out.find(std::string("| ") + kLocalScan); at != std::string::npos;
+       at = run.out.find(std::string("| ") + kLocalScan, at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, 2u) << run.out;
+  std::filesystem::create_directories(dir / "empty");
+  EXPECT_EQ(Cli("bench --shadow " + (dir / "empty").string(), dir).exit_code, 1);
 }
 
 }  // namespace

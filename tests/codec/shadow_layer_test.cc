@@ -59,21 +59,56 @@ TEST(ShadowLayer, TheEncoderRefusesWhatTheFormatCannotHold) {
   EXPECT_EQ(EncodeShadowLayer({static_cast<ShadowKind>(2), 1, {1}}).status().code(), StatusCode::kInvalidArgument);
 }
 
-TEST(ShadowLayer, EveryMalformedCaseOfTheSpecIsRefused) {
-  const ShadowLayer layer{ShadowKind::kSunHours, 12, {0, 0, 0, 9, 9, 255, 7, 7, 7, 7}};
-  const std::vector<uint8_t> good = Encode(layer);
+// A layer's bytes with `body` after a header of `version` (CRC computed).
+std::vector<uint8_t> WithBody(uint8_t version, ShadowKind kind, int samples, uint32_t n, const std::vector<uint8_t>& body) {
+  const uint8_t header[] = {'P', 'D', 'S', 'H', version, static_cast<uint8_t>(kind), static_cast<uint8_t>(samples),
+                            static_cast<uint8_t>(samples >> 8), static_cast<uint8_t>(n), static_cast<uint8_t>(n >> 8),
+                            static_cast<uint8_t>(n >> 16), static_cast<uint8_t>(n >> 24), 0, 0, 0, 0};
+  std::vector<uint8_t> bytes(std::begin(header), std::end(header));
+  bytes.resize(kShadowLayerHeaderBytes + body.size());
+  std::copy(body.begin(), body.end(), bytes.begin() + kShadowLayerHeaderBytes);
+  Reseal(bytes);
+  return bytes;
+}
+
+struct Damage {
+  const char* what;
+  std::function<void(std::vector<uint8_t>&)> damage;
+  StatusCode code;
+  uint64_t voxels = 10;
+};
+
+void ExpectRefused(const std::vector<uint8_t>& good, const std::vector<Damage>& cases) {
   ASSERT_TRUE(DecodeShadowLayer(good, 10).ok());
-  struct Case {
-    const char* what;
-    std::function<void(std::vector<uint8_t>&)> damage;
-    StatusCode code;
-    uint64_t voxels = 10;
-  };
-  const std::vector<Case> cases = {
+  for (const Damage& c : cases) {
+    std::vector<uint8_t> bytes = good;
+    c.damage(bytes);
+    const auto decoded = DecodeShadowLayer(bytes, c.voxels);
+    ASSERT_FALSE(decoded.ok()) << c.what;
+    EXPECT_EQ(decoded.status().code(), c.code) << c.what << ": " << decoded.status().ToString();
+  }
+}
+
+const std::vector<uint8_t> kLight = {0, 0, 0, 9, 9, 255, 7, 7, 7, 7};
+
+TEST(ShadowLayer, TheWriterUsesRunsFromThreeAndLiteralStringsBetween) {
+  // 0 x3 -> token 4, value 0; 9 9 255 -> token 5 and the three bytes; 7 x4 -> token 6, value 7.
+  EXPECT_EQ(Encode({ShadowKind::kSunHours, 12, kLight}), WithBody(2, ShadowKind::kSunHours, 12, 10, {4, 0, 5, 9, 9, 255, 6, 7}));
+  // Worst case: no two neighbours alike, about a byte a voxel.
+  std::mt19937 rng(11);
+  ShadowLayer noisy{ShadowKind::kSunHours, 48, std::vector<uint8_t>(5000)};
+  for (uint8_t& v : noisy.light) v = static_cast<uint8_t>(rng());
+  EXPECT_LE(Encode(noisy).size(), kShadowLayerHeaderBytes + 5000 * 105 / 100 + 8);
+}
+
+TEST(ShadowLayer, EveryMalformedCaseOfTheSpecIsRefused) {
+  const std::vector<uint8_t> good = Encode({ShadowKind::kSunHours, 12, kLight});  // body 4 0 5 9 9 255 6 7
+  ExpectRefused(good, {
       {"shorter than the header", [](auto& b) { b.resize(15); }, StatusCode::kTruncated},
       {"empty", [](auto& b) { b.clear(); }, StatusCode::kTruncated},
       {"wrong magic", [](auto& b) { b[0] = 'X'; }, StatusCode::kMalformed},
-      {"wrong version", [](auto& b) { b[4] = 2; }, StatusCode::kMalformed},
+      {"version 0", [](auto& b) { b[4] = 0; }, StatusCode::kMalformed},
+      {"version 3", [](auto& b) { b[4] = 3; }, StatusCode::kMalformed},
       {"unknown kind", [](auto& b) { b[5] = 2; }, StatusCode::kMalformed},
       {"samples 0", [](auto& b) { b[6] = b[7] = 0; }, StatusCode::kMalformed},
       {"samples 1441", [](auto& b) { b[6] = 1441 & 0xFF, b[7] = 1441 >> 8; }, StatusCode::kMalformed},
@@ -83,36 +118,46 @@ TEST(ShadowLayer, EveryMalformedCaseOfTheSpecIsRefused) {
       {"n = 0", [](auto& b) { b[8] = 0; }, StatusCode::kMalformed, 0},
       {"a huge n", [](auto& b) { b[8] = b[9] = b[10] = b[11] = 0xFF; }, StatusCode::kMalformed},
       {"a CRC mismatch", [](auto& b) { b[17] ^= 1; }, StatusCode::kCorrupt},
-      {"a run passing n", [](auto& b) { b[17] = 50, Reseal(b); }, StatusCode::kMalformed},
-      {"runs ending before n", [](auto& b) { b.resize(b.size() - 2), Reseal(b); }, StatusCode::kTruncated},
-      {"a varint cut short", [](auto& b) { b.back() = 0x80, Reseal(b); }, StatusCode::kTruncated},
-      {"a varint over 10 bytes",
-       [](auto& b) { b.resize(kShadowLayerHeaderBytes + 1), b.insert(b.end(), 11, 0xFF), Reseal(b); }, StatusCode::kTruncated},
-      {"a varint of 2^64 - 1",
-       [](auto& b) {
-         b.resize(kShadowLayerHeaderBytes + 1), b.insert(b.end(), 9, 0xFF), b.push_back(0x01), Reseal(b);
-       },
+      {"a run passing n", [](auto& b) { b[16] = 50, Reseal(b); }, StatusCode::kMalformed},
+      {"a literal string passing n", [](auto& b) { b[18] = 41, Reseal(b); }, StatusCode::kMalformed},
+      {"the body ending before n", [](auto& b) { b.resize(b.size() - 2), Reseal(b); }, StatusCode::kTruncated},
+      {"a run without its value", [](auto& b) { b.resize(b.size() - 1), Reseal(b); }, StatusCode::kTruncated},
+      {"a literal string cut short", [](auto& b) { b.resize(kShadowLayerHeaderBytes + 4), Reseal(b); }, StatusCode::kTruncated},
+      {"a token cut short", [](auto& b) { b.resize(kShadowLayerHeaderBytes + 6), b.push_back(0x80), Reseal(b); }, StatusCode::kTruncated},
+      {"a token over 10 bytes",
+       [](auto& b) { b.resize(kShadowLayerHeaderBytes), b.insert(b.end(), 11, 0xFF), Reseal(b); }, StatusCode::kTruncated},
+      {"a token of 2^64 - 1",
+       [](auto& b) { b.resize(kShadowLayerHeaderBytes), b.insert(b.end(), 9, 0xFF), b.push_back(0x01), Reseal(b); },
        StatusCode::kMalformed},
       {"bytes after the last run", [](auto& b) { b.push_back(0), Reseal(b); }, StatusCode::kMalformed},
-  };
-  for (const Case& c : cases) {
-    std::vector<uint8_t> bytes = good;
-    c.damage(bytes);
-    const auto decoded = DecodeShadowLayer(bytes, c.voxels);
-    ASSERT_FALSE(decoded.ok()) << c.what;
-    EXPECT_EQ(decoded.status().code(), c.code) << c.what << ": " << decoded.status().ToString();
-  }
+  });
+}
+
+// Version 1 (runs only) is still read: layers a daemon stored before version 2.
+TEST(ShadowLayer, VersionOneRunsAreReadAndCheckedAlike) {
+  const std::vector<uint8_t> v1 = WithBody(1, ShadowKind::kSunHours, 12, 10, {0, 2, 9, 1, 255, 0, 7, 3});
+  const auto decoded = DecodeShadowLayer(v1, 10);
+  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+  EXPECT_EQ(decoded->light, kLight);
+  ExpectRefused(v1, {
+      {"a run passing n", [](auto& b) { b[17] = 50, Reseal(b); }, StatusCode::kMalformed},
+      {"runs ending before n", [](auto& b) { b.resize(b.size() - 2), Reseal(b); }, StatusCode::kTruncated},
+      {"a run length cut short", [](auto& b) { b.back() = 0x80, Reseal(b); }, StatusCode::kTruncated},
+      {"a run length of 2^64 - 1",
+       [](auto& b) { b.resize(kShadowLayerHeaderBytes + 1), b.insert(b.end(), 9, 0xFF), b.push_back(0x01), Reseal(b); },
+       StatusCode::kMalformed},
+      {"bytes after the last run", [](auto& b) { b.push_back(0), Reseal(b); }, StatusCode::kMalformed},
+  });
 }
 
 TEST(ShadowLayer, NonMaximalRunsAreRead) {
-  // Two runs of the same value one after the other: legal, read as written.
-  std::vector<uint8_t> bytes = Encode({ShadowKind::kDirection, 1, {4, 4, 4}});
-  bytes.resize(kShadowLayerHeaderBytes);
-  bytes.insert(bytes.end(), {4, 0, 4, 1});
-  Reseal(bytes);
-  const auto decoded = DecodeShadowLayer(bytes, 3);
-  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
-  EXPECT_EQ(decoded->light, (std::vector<uint8_t>{4, 4, 4}));
+  // Two runs of the same value one after the other, and a literal string of equal bytes: legal, read as written.
+  for (const auto& bytes : {WithBody(2, ShadowKind::kDirection, 1, 5, {0, 4, 2, 4, 3, 4, 4}),
+                            WithBody(1, ShadowKind::kDirection, 1, 5, {4, 0, 4, 1, 4, 1})}) {
+    const auto decoded = DecodeShadowLayer(bytes, 5);
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_EQ(decoded->light, (std::vector<uint8_t>{4, 4, 4, 4, 4}));
+  }
 }
 
 TEST(ShadowLayer, LightByteRoundsHalfUpExactly) {

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
+#include <string>
 
 #include "pointdag/shadow/solar_ephemeris.h"
 #include "pointdag/shadow/solar_position.h"
@@ -189,6 +191,30 @@ TEST(ParseUtcTime, RefusesGarbageAndMissingZones) {
     EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument);
   }
   EXPECT_FALSE(ParseUtcTime(std::string_view("2026-06-21T12:00:00Z\0", 21)).ok());
+}
+
+// Hostile strings: every mutation of a valid time is either a time or kInvalidArgument, never a crash.
+TEST(ParseUtcTime, SurvivesMutatedInput) {
+  const std::string valid = "2026-06-21T12:34:56.789+05:30";
+  std::mt19937 rng(16);
+  for (int i = 0; i < 20000; ++i) {
+    std::string s = valid;
+    for (int k = 0, n = 1 + static_cast<int>(rng() % 3); k < n; ++k) {
+      const size_t at = rng() % (s.size() + 1);
+      const char c = static_cast<char>(rng() % 256);
+      switch (rng() % 3) {
+        case 0: if (at < s.size()) s[at] = c; break;
+        case 1: s.insert(s.begin() + static_cast<std::ptrdiff_t>(at), c); break;
+        default: if (at < s.size()) s.erase(at, 1); break;
+      }
+    }
+    auto t = ParseUtcTime(s);
+    if (t.ok()) {
+      EXPECT_TRUE(std::isfinite(*t)) << s;
+    } else {
+      EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument) << s;
+    }
+  }
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 // the tile cache against DELETE. Configurations the daemon's flags do not reach yet are tested here.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
+#include <thread>
 
 #include "jobs.h"
 #include "metrics.h"
@@ -89,6 +91,41 @@ TEST_F(ServiceTest, RequireTokenForReadsGuardsEveryReadButHealth) {
   EXPECT_EQ(service.Handle(Get("/livez")).status, 200);
   EXPECT_EQ(service.Handle(Get("/readyz")).status, 200);
   EXPECT_EQ(service.Handle({"OPTIONS", kTile, {}, ""}).status, 204);
+}
+
+TEST_F(ServiceTest, ShadowRoutesFollowTheTokenScopesAndAFailedJobStoresNothing) {
+  Service service = Make(Scoped(true));
+  const std::string shadows = std::string("/v1/datasets/") + kDataset + "/shadows";
+  const std::map<std::string, std::string> reader{{"authorization", "Bearer read-secret"}}, writer{{"authorization", "Bearer write-secret"}};
+  for (const std::string& target : {shadows, shadows + "/tiles/0/0/0/0"}) {
+    EXPECT_EQ(service.Handle(Get(target)).status, 401) << target;
+    const HttpResponse r = service.Handle(Get(target, reader));
+    EXPECT_EQ(r.status, 404) << target;  // allowed to read: the dataset has no shadows
+    EXPECT_EQ(r.route, target == shadows ? "/v1/datasets/{id}/shadows" : "/v1/datasets/{id}/shadows/tiles");
+  }
+  const std::string body = R"({"direction": [0, 0, -1]})";
+  EXPECT_EQ(service.Handle({"POST", shadows, reader, body}).status, 403);
+  EXPECT_EQ(service.Handle({"DELETE", shadows, reader, ""}).status, 403);
+  EXPECT_EQ(service.Handle({"POST", shadows, {}, body}).status, 401);
+  EXPECT_EQ(service.Handle({"POST", shadows, {{"authorization", "Bearer a, Bearer b"}}, body}).status, 400);
+  // The fixture's dataset has no frame: a time is refused, asking for a direction.
+  const HttpResponse time = service.Handle({"POST", shadows, writer, R"({"time": "2026-06-21T12:00:00Z"})"});
+  EXPECT_EQ(time.status, 400);
+  EXPECT_NE(time.body.find("give a direction"), std::string::npos) << time.body;
+  // Its tile is no .pdag, so the job fails; nothing is stored.
+  const HttpResponse posted = service.Handle({"POST", shadows, writer, body});
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  const std::string job = HeaderOf(posted, "Location");
+  std::string state;
+  for (int i = 0; i < 200 && state != "failed" && state != "done"; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    state = nlohmann::json::parse(service.Handle(Get(job, reader)).body)["status"];
+  }
+  EXPECT_EQ(state, "failed");
+  const nlohmann::json ended = nlohmann::json::parse(service.Handle(Get(job, reader)).body);
+  EXPECT_EQ(ended["kind"], "shadows");
+  EXPECT_EQ(ended["error"], "Corrupt: the dataset's metadata lacks depth");
+  EXPECT_EQ(service.Handle(Get(shadows, reader)).status, 404);
 }
 
 TEST_F(ServiceTest, BearerIsCaseInsensitiveAndOnlyTheWholeTokenMatches) {

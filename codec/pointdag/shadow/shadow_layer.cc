@@ -13,7 +13,12 @@ namespace pointdag {
 namespace {
 
 constexpr uint8_t kMagic[4] = {'P', 'D', 'S', 'H'};
-constexpr uint8_t kVersion = 1;
+// Version 1: runs (value, length - 1). Version 2, written: runs and literal strings (PackBits-like),
+// so that neighbours that differ cost about a byte each instead of two. Both are read.
+constexpr uint8_t kRunsVersion = 1;
+constexpr uint8_t kVersion = 2;
+// A run shorter than this goes into the literal string around it: a run token would cost as much.
+constexpr size_t kMinRun = 3;
 
 void PutLe(std::vector<uint8_t>& out, uint64_t v, int bytes) {
   for (int i = 0; i < bytes; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
@@ -23,6 +28,65 @@ uint64_t GetLe(std::span<const uint8_t> in, size_t at, int bytes) {
   uint64_t v = 0;
   for (int i = 0; i < bytes; ++i) v |= uint64_t{in[at + static_cast<size_t>(i)]} << (8 * i);
   return v;
+}
+
+size_t RunAt(const std::vector<uint8_t>& light, size_t i) {
+  size_t j = i + 1;
+  while (j < light.size() && light[j] == light[i]) ++j;
+  return j - i;
+}
+
+// Version 2's body: tokens t (varint); t even: t / 2 + 1 copies of the next byte; t odd: (t - 1) / 2 + 1 bytes follow.
+void PutTokens(std::vector<uint8_t>& out, const std::vector<uint8_t>& light) {
+  for (size_t i = 0; i < light.size();) {
+    const size_t run = RunAt(light, i);
+    if (run >= kMinRun) {
+      PutVarint(out, (run - 1) << 1);
+      out.push_back(light[i]);
+      i += run;
+      continue;
+    }
+    size_t j = i;
+    while (j < light.size()) {
+      const size_t next = RunAt(light, j);
+      if (next >= kMinRun) break;
+      j += next;
+    }
+    PutVarint(out, ((j - i - 1) << 1) | 1);
+    out.insert(out.end(), light.begin() + static_cast<long>(i), light.begin() + static_cast<long>(j));
+    i = j;
+  }
+}
+
+// Reads version 1's runs or version 2's tokens into `light` until it holds n voxels.
+Status ReadBody(std::span<const uint8_t> body, uint8_t version, uint64_t n, std::vector<uint8_t>& light) {
+  size_t pos = 0;
+  while (light.size() < n) {
+    const std::string at = " at voxel " + std::to_string(light.size()) + " of " + std::to_string(n);
+    if (pos >= body.size()) return Truncated("the shadow layer ends" + at);
+    uint64_t token = 0;
+    if (version == kRunsVersion) {
+      const uint8_t value = body[pos++];
+      if (!GetVarint(body, pos, token)) return Truncated("a run length of the shadow layer is cut short or over 64 bits" + at);
+      if (token >= n - light.size()) return Malformed("a run of the shadow layer passes its voxels" + at);
+      light.insert(light.end(), token + 1, value);
+      continue;
+    }
+    if (!GetVarint(body, pos, token)) return Truncated("a token of the shadow layer is cut short or over 64 bits" + at);
+    const bool literal = token & 1;
+    const uint64_t count = (token >> 1) + 1;
+    if (count > n - light.size()) return Malformed(std::string(literal ? "a literal string" : "a run") + " of the shadow layer passes its voxels" + at);
+    if (!literal) {
+      if (pos >= body.size()) return Truncated("the shadow layer ends before a run's value" + at);
+      light.insert(light.end(), count, body[pos++]);
+    } else {
+      if (count > body.size() - pos) return Truncated("the shadow layer ends inside a literal string" + at);
+      light.insert(light.end(), body.begin() + static_cast<long>(pos), body.begin() + static_cast<long>(pos + count));
+      pos += count;
+    }
+  }
+  if (pos != body.size()) return Malformed(std::to_string(body.size() - pos) + " bytes after the shadow layer's last run");
+  return Status::Ok();
 }
 
 Status CheckKindAndSamples(ShadowKind kind, int64_t samples) {
@@ -55,14 +119,8 @@ StatusOr<std::vector<uint8_t>> EncodeShadowLayer(const ShadowLayer& layer) {
   out.push_back(static_cast<uint8_t>(layer.kind));
   PutLe(out, static_cast<uint64_t>(layer.samples), 2);
   PutLe(out, layer.light.size(), 4);
-  PutLe(out, 0, 4);  // the CRC, once the runs are written
-  for (size_t i = 0; i < layer.light.size();) {
-    size_t j = i + 1;
-    while (j < layer.light.size() && layer.light[j] == layer.light[i]) ++j;
-    out.push_back(layer.light[i]);
-    PutVarint(out, j - i - 1);
-    i = j;
-  }
+  PutLe(out, 0, 4);  // the CRC, once the body is written
+  PutTokens(out, layer.light);
   const uint32_t crc = Crc32c(std::span<const uint8_t>(out).subspan(kShadowLayerHeaderBytes));
   for (int i = 0; i < 4; ++i) out[12 + static_cast<size_t>(i)] = static_cast<uint8_t>(crc >> (8 * i));
   return out;
@@ -73,7 +131,10 @@ StatusOr<ShadowLayer> DecodeShadowLayer(std::span<const uint8_t> bytes, uint64_t
     return Truncated("a shadow layer is at least 16 bytes; this one is " + std::to_string(bytes.size()));
   }
   if (std::memcmp(bytes.data(), kMagic, 4) != 0) return Malformed("not a shadow layer (its magic is not PDSH)");
-  if (bytes[4] != kVersion) return Malformed("shadow layer version " + std::to_string(bytes[4]) + "; this reader knows 1");
+  const uint8_t version = bytes[4];
+  if (version != kRunsVersion && version != kVersion) {
+    return Malformed("shadow layer version " + std::to_string(version) + "; this reader knows 1 and 2");
+  }
   ShadowLayer layer;
   layer.kind = static_cast<ShadowKind>(bytes[5]);
   layer.samples = static_cast<int>(GetLe(bytes, 6, 2));
@@ -82,23 +143,10 @@ StatusOr<ShadowLayer> DecodeShadowLayer(std::span<const uint8_t> bytes, uint64_t
   if (n != tile_voxels || n == 0) {
     return Malformed("the shadow layer covers " + std::to_string(n) + " voxels; its tile has " + std::to_string(tile_voxels));
   }
-  const std::span<const uint8_t> runs = bytes.subspan(kShadowLayerHeaderBytes);
-  if (Crc32c(runs) != static_cast<uint32_t>(GetLe(bytes, 12, 4))) return Corrupt("the shadow layer's CRC-32C does not match its runs");
+  const std::span<const uint8_t> body = bytes.subspan(kShadowLayerHeaderBytes);
+  if (Crc32c(body) != static_cast<uint32_t>(GetLe(bytes, 12, 4))) return Corrupt("the shadow layer's CRC-32C does not match its body");
   layer.light.reserve(n);
-  size_t pos = 0;
-  while (layer.light.size() < n) {
-    if (pos >= runs.size()) {
-      return Truncated("the shadow layer's runs end after " + std::to_string(layer.light.size()) + " of " + std::to_string(n) + " voxels");
-    }
-    const uint8_t value = runs[pos++];
-    uint64_t more = 0;
-    if (!GetVarint(runs, pos, more)) return Truncated("a run length of the shadow layer is cut short or over 64 bits");
-    if (more >= n - layer.light.size()) {
-      return Malformed("a run of the shadow layer passes its " + std::to_string(n) + " voxels");
-    }
-    layer.light.insert(layer.light.end(), more + 1, value);
-  }
-  if (pos != runs.size()) return Malformed(std::to_string(runs.size() - pos) + " bytes after the shadow layer's last run");
+  RETURN_IF_ERROR(ReadBody(body, version, n, layer.light));
   return layer;
 }
 

@@ -4,6 +4,7 @@
 // Contract: light = round(255 · lit fraction), the fraction of a finest voxel being (lights that
 // light it) / (lights) and of a coarser voxel the mean over the finest voxels it covers, so a coarse
 // byte is the mean of the fine ones *before* rounding (ties round up: (510·lit + n·s) / (2·n·s)).
+// Written as version 2 (runs and literal strings); version 1 (runs only) is read too.
 // The decoder takes hostile bytes: every violation of §2 is a typed Status (kMalformed for the
 // format's own rules, kCorrupt for a CRC mismatch, kTruncated for bytes that end too soon), memory
 // is bounded by the caller's voxel count, never by the header.
