@@ -1,5 +1,6 @@
 // Writers of per-tile shadow layers (proto/SHADOW_FORMAT.md §2) for the tests: a valid layer of any
-// light values (version 1: maximal runs; version 2: runs of 2 or more, literals between), and a frame with a correct CRC-32C around any run bytes, so that a
+// light values (version 1: maximal runs; version 2: as the C++ writer, a run of every stretch of 3 or
+// more equal bytes, literal strings of the rest), and a frame with a correct CRC-32C around any run bytes, so that a
 // hostile case reaches the check it aims at rather than the CRC.
 import { crc32c } from '../../../web/src/decoder/crc32c.js';
 import { varint } from './pdag_writer.mjs';
@@ -31,6 +32,7 @@ export function frameShadowLayer(runs, { magic = 'PDSH', version = 1, kind = 0, 
 }
 
 // Version 2's tokens: varint 2(len - 1) then the value for a run, varint 2(len - 1) + 1 then the bytes for literals.
+const MIN_RUN = 3;
 export function shadowTokens(light) {
   const out = [];
   let literals = [];
@@ -41,11 +43,11 @@ export function shadowTokens(light) {
   for (let i = 0; i < light.length;) {
     let j = i + 1;
     while (j < light.length && light[j] === light[i]) ++j;
-    if (j - i >= 2) {
+    if (j - i >= MIN_RUN) {
       flush();
       out.push(...varint(2 * (j - i - 1)), light[i]);
     } else {
-      literals.push(light[i]);
+      for (let k = i; k < j; ++k) literals.push(light[k]);
     }
     i = j;
   }
