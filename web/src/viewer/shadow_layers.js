@@ -54,10 +54,10 @@ export class ShadowLayers {
     };
   }
 
-  // node: {points (THREE.Points, null once evicted), voxels, path() 'L/X/Y/Z'} (a TileNode, or the
-  // 3D Tiles view's stand-in). Gives the node's resident points their layer: `pending` (a fetch() started beside the tile's),
-  // else a fetch of its own when shadows are wanted. The points' userData.shadow says how it went:
-  // 'loading', 'shaded' or 'none'.
+  // Gives the node's resident points their layer: `pending` (a fetch() started beside the tile's),
+  // else a fetch of its own when shadows are wanted. node: {points (THREE.Points, null once
+  // evicted), voxels, path() 'L/X/Y/Z'}, a TileNode or the 3D Tiles view's stand-in. The points'
+  // userData.shadow says how it went: 'loading', 'shaded' or 'none'.
   adopt(node, pending = null) {
     const points = node.points;
     if (!points || points.userData.shadow) return;
