@@ -51,7 +51,8 @@ export async function waitShadowsSettled(page) {
 // Toggles the page's Shadows checkbox to `on` and waits for the frame that shows it.
 export async function setShadows(page, on) {
   await page.locator('#shadows').setChecked(on);
-  await page.waitForTimeout(300); // the render loop draws on the next animation frame
+  // The render loop draws on the next animation frame: two frames later it has.
+  await page.evaluate(() => new Promise((resolve) => requestAnimationFrame(() => requestAnimationFrame(resolve))));
 }
 
 function median(values) {
