@@ -290,6 +290,11 @@ TEST(ShadowedVoxels, BelowHorizonShadowsEverythingAndBadLightsAreRefused) {
     ASSERT_FALSE(counts.ok());
     EXPECT_EQ(counts.status().code(), StatusCode::kInvalidArgument);
   }
+  Svdag too_deep = dag;
+  too_deep.depth = 22;
+  auto refused = ShadowedVoxels(too_deep, MakeLight(0, 0, -1));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(LitSampleCounts, IsTheSumOfLitAnswers) {

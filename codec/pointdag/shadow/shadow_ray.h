@@ -12,11 +12,12 @@
 // One caster per thread (it keeps its traversal stack); the DAG is only read.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
-#include <vector>
 
 #include "pointdag/dag/svdag.h"
+#include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
 
@@ -41,7 +42,12 @@ class ShadowRayCaster {
   struct ChildSlabs {
     double enter[3][2];
     double exit[3][2];
-    bool Reach(uint32_t octant) const;
+    bool Reach(uint32_t octant) const {
+      const uint32_t bx = (octant >> 2) & 1u, by = (octant >> 1) & 1u, bz = octant & 1u;
+      const double t0 = std::max(std::max(enter[0][bx], enter[1][by]), std::max(enter[2][bz], 0.0));
+      const double t1 = std::min(std::min(exit[0][bx], exit[1][by]), exit[2][bz]);
+      return t0 <= t1;
+    }
   };
   void Slabs(const std::array<uint32_t, 3>& lo, uint32_t half, ChildSlabs& slabs) const;
   bool BrickBlocks(uint64_t brick, const std::array<uint32_t, 3>& lo) const;
@@ -53,7 +59,8 @@ class ShadowRayCaster {
   uint32_t flip_ = 0;             // octant bits of the axes the ray runs down: front-to-back order
   std::array<double, 3> origin_{};
   std::array<uint32_t, 3> self_{};
-  std::vector<Entry> stack_;
+  // Depth first, at most 8 children pushed per level on the way down.
+  std::array<Entry, 8 * kMaxDepth + 1> stack_;
 };
 
 }  // namespace pointdag

@@ -26,6 +26,13 @@ Status CheckLight(const Light& light) {
   return Status::Ok();
 }
 
+Status CheckDag(const Svdag& dag) {
+  if (dag.depth < 2 || dag.depth > kMaxDepth) {
+    return InvalidArgument("DAG depth " + std::to_string(dag.depth) + " is outside 2..21");
+  }
+  return Status::Ok();
+}
+
 int WorkerCount(int threads, size_t voxels) {
   size_t n = threads > 0 ? static_cast<size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
   n = std::min(n, (voxels + kBlock - 1) / kBlock);
@@ -73,6 +80,7 @@ bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 
 }
 
 StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads) {
+  RETURN_IF_ERROR(CheckDag(dag));
   RETURN_IF_ERROR(CheckLight(light));
   const std::vector<uint64_t> codes = dag.MortonCodes();
   std::vector<uint8_t> shadowed(codes.size(), 1);
@@ -84,6 +92,7 @@ StatusOr<std::vector<uint16_t>> LitSampleCounts(const Svdag& dag, std::span<cons
   if (lights.size() > kMaxLights) {
     return InvalidArgument(std::to_string(lights.size()) + " light samples; at most 65535 are counted");
   }
+  RETURN_IF_ERROR(CheckDag(dag));
   for (const Light& light : lights) RETURN_IF_ERROR(CheckLight(light));
   const std::vector<uint64_t> codes = dag.MortonCodes();
   std::vector<uint16_t> lit(codes.size(), 0);
