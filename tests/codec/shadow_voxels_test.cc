@@ -211,7 +211,9 @@ TEST(ShadowedVoxels, RandomClutterAgreesWithBruteForce) {
   std::sort(codes.begin(), codes.end());
   codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
   std::normal_distribution<double> gauss;
-  std::vector<std::array<double, 3>> directions = {{0, 0, -1}, {1, 1, -1}, {-1, 1, 1}, {1, 2, -2}, {0, 1, 0}};
+  // Besides grazing diagonals: components so small that their inverses overflow to infinity.
+  std::vector<std::array<double, 3>> directions = {{0, 0, -1}, {1, 1, -1}, {-1, 1, 1}, {1, 2, -2}, {0, 1, 0},
+                                                   {1e-320, -1e-310, -1}, {1, 1e-300, 1e-300}};
   for (int i = 0; i < 6; ++i) directions.push_back({gauss(rng), gauss(rng), gauss(rng)});
   for (int depth : {4, 6}) {  // 6: the same voxels in a corner of a bigger grid, more levels above
     const Svdag dag = DagOf(codes, depth);

@@ -73,10 +73,25 @@ bool ShadowRayCaster::BrickBlocks(uint64_t brick, const std::array<uint32_t, 3>&
   return false;
 }
 
+void ShadowRayCaster::FindOwnBrick(const std::array<uint32_t, 3>& voxel) {
+  const std::array<uint32_t, 3> lo{voxel[0] & ~3u, voxel[1] & ~3u, voxel[2] & ~3u};
+  if (lo == own_lo_) return;
+  uint32_t ref = 0;
+  for (int level = 0; level < dag_.depth - 2; ++level) {
+    const int shift = dag_.depth - 1 - level;
+    const uint32_t octant = ((voxel[0] >> shift) & 1u) << 2 | ((voxel[1] >> shift) & 1u) << 1 | ((voxel[2] >> shift) & 1u);
+    ref = dag_.nodes[ref + 1 + kBits[dag_.Mask(ref) & ((1u << octant) - 1)]];
+  }
+  own_lo_ = lo;
+  own_ref_ = ref;
+}
+
 bool ShadowRayCaster::Blocked(const std::array<uint32_t, 3>& voxel) {
   if (dag_.leaves.empty()) return false;
   self_ = voxel;
   for (int a = 0; a < 3; ++a) origin_[a] = voxel[a] + 0.5;
+  FindOwnBrick(voxel);
+  if (BrickBlocks(dag_.leaves[own_ref_], own_lo_)) return true;
   const int brick_level = dag_.depth - 2;
   size_t top = 0;
   stack_[top++] = {0, 0, {0, 0, 0}};
@@ -84,7 +99,7 @@ bool ShadowRayCaster::Blocked(const std::array<uint32_t, 3>& voxel) {
   while (top) {
     const Entry e = stack_[--top];
     if (e.level == brick_level) {
-      if (BrickBlocks(dag_.leaves[e.ref], e.lo)) return true;
+      if (e.lo != own_lo_ && BrickBlocks(dag_.leaves[e.ref], e.lo)) return true;
       continue;
     }
     const uint32_t half = uint32_t{1} << (dag_.depth - e.level - 1);
