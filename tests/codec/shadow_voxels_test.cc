@@ -215,11 +215,20 @@ TEST(ShadowedVoxels, RandomClutterAgreesWithBruteForce) {
   std::vector<std::array<double, 3>> directions = {{0, 0, -1}, {1, 1, -1}, {-1, 1, 1}, {1, 2, -2}, {0, 1, 0},
                                                    {1e-320, -1e-310, -1}, {1, 1e-300, 1e-300}};
   for (int i = 0; i < 6; ++i) directions.push_back({gauss(rng), gauss(rng), gauss(rng)});
-  for (int depth : {4, 6}) {  // 6: the same voxels in a corner of a bigger grid, more levels above
-    const Svdag dag = DagOf(codes, depth);
+  // The same voxels in a 16^3 grid, in a corner of a 64^3 one (more levels above), and in the far
+  // corner of a 2^21 grid, where coordinates near 2^21 test the slab test's rounding margin.
+  for (int depth : {4, 6, kMaxDepth}) {
+    const uint32_t shift = depth == kMaxDepth ? (1u << depth) - 16 : 0;
+    std::vector<uint64_t> placed;
+    for (uint64_t code : codes) {
+      const Cell c = MortonDecode(code);
+      placed.push_back(MortonEncode(c[0] + shift, c[1] + shift, c[2] + shift));
+    }
+    std::sort(placed.begin(), placed.end());
+    const Svdag dag = DagOf(placed, depth);
     for (const auto& d : directions) {
       const Light light = MakeLight(d[0], d[1], d[2]);
-      ExpectSame(Shadows(dag, light), BruteForce(codes, light), codes, "clutter depth " + std::to_string(depth));
+      ExpectSame(Shadows(dag, light), BruteForce(placed, light), placed, "clutter depth " + std::to_string(depth));
     }
   }
 }
@@ -254,6 +263,10 @@ TEST_P(ScanShadows, AgreeWithBruteForceOnEveryVoxel) {
                "direction (" + std::to_string(d[0]) + ", " + std::to_string(d[1]) + ", " + std::to_string(d[2]) + ")");
     for (uint8_t s : got) shadowed_total += s;
   }
+  // A mipmap-mode DAG of the same voxels: the same answers in the same (Morton) order.
+  const Svdag mip = DagOf(codes, grid->depth, CountMode::kMipmap);
+  const Light sun = MakeLight(directions.back()[0], directions.back()[1], directions.back()[2]);
+  EXPECT_EQ(Shadows(mip, sun), Shadows(dag, sun));
   // Real geometry: some voxels lit, some shadowed.
   EXPECT_GT(shadowed_total, 0u);
   EXPECT_LT(shadowed_total, codes.size() * directions.size());
