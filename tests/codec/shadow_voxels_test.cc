@@ -200,6 +200,26 @@ TEST(ShadowedVoxels, GrazingEdgesAgreeWithBruteForce) {
   }
 }
 
+// The definition's consequence for flat ground: a voxel's ray leaves its cell through a side face
+// (into the neighbour) when the light is lower than 45 degrees along an axis, through the top when
+// higher. So a one-voxel plane is self-shadowed except its first column below 45 degrees, and lit above.
+TEST(ShadowedVoxels, FlatGroundShadowsItselfBelowFortyFiveDegrees) {
+  std::vector<uint64_t> codes;
+  for (uint32_t x = 0; x < 32; ++x) {
+    for (uint32_t y = 0; y < 32; ++y) codes.push_back(MortonEncode(x, y, 0));
+  }
+  std::sort(codes.begin(), codes.end());
+  const Svdag dag = DagOf(codes, kPlaneDepth);
+  const double pi = std::acos(-1.0);
+  for (double degrees : {40.0, 50.0}) {
+    const double e = degrees * pi / 180;
+    const Light light = MakeLight(std::cos(e), 0, -std::sin(e));  // travels +x: rays run to -x
+    std::vector<uint8_t> want;
+    for (uint64_t code : codes) want.push_back(degrees < 45 && MortonDecode(code)[0] > 0 ? 1 : 0);
+    ExpectSame(Shadows(dag, light), want, codes, "elevation " + std::to_string(degrees));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Brute force on random clutter (no data needed) and on real scans.
 
