@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #include "pointdag/shadow/shadow_ray.h"
@@ -14,7 +15,7 @@ namespace pointdag {
 namespace {
 
 constexpr size_t kMaxLights = 65535;  // counts are 16-bit
-constexpr size_t kBlock = 512;        // voxels a worker takes at a time (Morton neighbours: coherent rays)
+constexpr size_t kBlock = 512;        // voxels a worker takes at a time (Morton neighbours share bricks)
 
 Status CheckLight(const Light& light) {
   if (light.below_horizon) return Status::Ok();
@@ -52,7 +53,13 @@ void CastAll(const Svdag& dag, const Light& light, const std::vector<uint64_t>& 
   };
   const int workers = WorkerCount(threads, codes.size());
   std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  for (int w = 1; w < workers; ++w) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: the workers running take the remaining blocks
+    }
+  }
   work();
   for (auto& t : pool) t.join();
 }
