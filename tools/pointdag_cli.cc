@@ -3,8 +3,10 @@
 //   pointdag decode IN.pdag -o OUT.ply
 //   pointdag info IN.pdag [--json]
 //   pointdag compare IN (--voxel SIZE | --depth D) [--json]
-//   pointdag bench [--data DIR] [--json]
+//   pointdag bench [--data DIR] [--json]    (--shadow [DIR]: shadow_bench.h)
 //   pointdag export IN.pdag|URL --3dtiles DIR
+//   pointdag shadow IN (--direction X,Y,Z | --time ISO8601 [--until ISO8601 --samples N]) (--voxel S | --depth D)
+//                   [--json] [-o OUT.ply|OUT.pdsh]   (shadow_command.h)
 // Exit codes: 0 ok, 1 bad input (message on stderr), 2 usage.
 #include <unistd.h>
 
@@ -25,6 +27,8 @@
 #include "pointdag/pipeline.h"
 #include "pointdag/write/ply_writer.h"
 #include "progress.h"
+#include "shadow_bench.h"
+#include "shadow_command.h"
 
 namespace pointdag {
 namespace {
@@ -305,6 +309,9 @@ int Main(int argc, char** argv) {
   export_cmd->add_option("input", input, "IN.pdag or http://HOST:PORT/v1/datasets/ID")->required();
   export_cmd->add_option("--3dtiles", tiles3d_dir, "output folder: tileset.json and {level}/{x}/{y}/{z}.glb")->required();
 
+  ShadowCommand shadow_command;
+  auto* shadow = AddShadowCommand(app, shadow_command);
+
   BenchOptions bench_options;
   auto* bench = app.add_subcommand("bench", "benchmark every scan in a folder (read, voxelize, build, sizes, Draco)");
   bench->add_option("--data", bench_options.data_dir, "folder of scans")->check(CLI::ExistingDirectory);
@@ -315,6 +322,11 @@ int Main(int argc, char** argv) {
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
   bench->add_flag("--laz", bench_options.laz, "LAZ decoding of DATA/laz: points/s on one core and all; LAZ vs LAS ingest");
   bench->add_flag("--versus", bench_options.versus, "ours, Draco and G-PCC side by side: geometry, colors at 34/38/42 dB, lossless totals");
+  std::string shadow_bench_dir;
+  auto* shadow_bench = bench->add_option("--shadow", shadow_bench_dir,
+                                         "shadow DAGs of every scan in DIR (default: --data) at two resolutions: sizes "
+                                         "against the dense grid and a shadow map, build time, memory, queries/s")
+                           ->expected(0, 1);
   auto* corpus = bench->add_option("--corpus", bench_options.corpus,
                                    "nightly benchmark: a corpus TOML file or a folder of scans (docs/nightly.md)")
                      ->check(CLI::ExistingPath);
@@ -370,9 +382,13 @@ int Main(int argc, char** argv) {
   if (decode->parsed()) return RunDecode(input, output);
   if (info->parsed()) return RunInfo(input, json);
   if (compare->parsed()) return RunCompare(input, grid, json);
+  if (bench->parsed() && shadow_bench->count() > 0) {
+    return RunShadowBench(shadow_bench_dir.empty() ? bench_options.data_dir : shadow_bench_dir, std::cout);
+  }
   if (bench->parsed()) return RunBench(bench_options);
   if (fetch->parsed()) return RunFetch(url, level, output);
   if (export_cmd->parsed()) return RunExport(input, tiles3d_dir);
+  if (shadow->parsed()) return RunShadowCommand(shadow_command);
   return 2;
 }
 

@@ -1,7 +1,9 @@
 // Stage 10a (issue #16): one shadow ray at a time through an Svdag's structure.
 //
 // How: a front-to-back depth-first descent of the DAG along the half-line from a voxel's centre
-// towards the light (hierarchical empty-space skipping: an empty octant is never entered). Boxes
+// towards the light (hierarchical empty-space skipping: an empty octant is never entered). The
+// children of a node are visited in octant order XOR the ray's sign bits, which is front to back
+// for any ray; their slab intervals come from four planes per axis computed once per node. Boxes
 // are tested with a margin of kMargin grid units, far above the rounding of the slab test in
 // a 2^21 grid, so every cell that RayMeetsCell() could accept is reached; each reached voxel is
 // then decided by RayMeetsCell() itself, which keeps the tie rules (grazed edges and corners) of
@@ -33,14 +35,22 @@ class ShadowRayCaster {
     std::array<uint32_t, 3> lo;
   };
 
-  // Whether the margin-grown box [lo, lo + size]^3 meets the ray at some t >= 0; `t_enter` is where.
-  bool Enters(const std::array<uint32_t, 3>& lo, uint32_t size, double& t_enter) const;
+  // Entry and exit parameters of the ray, per axis and child bit, for the margin-grown halves of
+  // a node at `lo` whose children have side `half`; a child is reached when its three intervals
+  // and t >= 0 overlap.
+  struct ChildSlabs {
+    double enter[3][2];
+    double exit[3][2];
+    bool Reach(uint32_t octant) const;
+  };
+  void Slabs(const std::array<uint32_t, 3>& lo, uint32_t half, ChildSlabs& slabs) const;
   bool BrickBlocks(uint64_t brick, const std::array<uint32_t, 3>& lo) const;
 
   const Svdag& dag_;
   std::array<double, 3> travel_;
   std::array<double, 3> inv_{};   // 1 / component of -travel, towards the light (unused when zero)
   std::array<bool, 3> flat_{};    // the ray keeps this coordinate
+  uint32_t flip_ = 0;             // octant bits of the axes the ray runs down: front-to-back order
   std::array<double, 3> origin_{};
   std::array<uint32_t, 3> self_{};
   std::vector<Entry> stack_;

@@ -3,12 +3,23 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag {
 
-Status WriteVoxelsPly(const std::filesystem::path& path, const VoxelGrid& grid);
+// A per-voxel float property written after the colors (a shadow bit, sun hours): one value a voxel.
+struct PlyScalar {
+  std::string name;
+  std::span<const float> values;
+};
+
+// kInvalidArgument when `scalar` has not one value per voxel.
+Status WriteVoxelsPly(const std::filesystem::path& path, const VoxelGrid& grid,
+                      const std::optional<PlyScalar>& scalar = std::nullopt);
 
 }  // namespace pointdag
