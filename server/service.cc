@@ -331,12 +331,9 @@ HttpResponse Service::Route(const HttpRequest& request) {
 
 HttpResponse Service::RouteShadows(const HttpRequest& request, const std::string& id, const std::vector<std::string>& parts) {
   const bool get = request.method == "GET" || request.method == "HEAD";
-  const auto method_not_allowed = [&](const std::string& route, const std::string& allow) {
-    return MethodNotAllowed(request, route, allow);
-  };
   if (parts.size() > 4) {
     const std::string route = ShadowService::kTilesRoute;
-    if (!get) return method_not_allowed(route, "GET");
+    if (!get) return MethodNotAllowed(request, route, "GET");
     if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
     const auto key = parts[4] == "tiles" ? ParseTileKey(parts, 5) : std::nullopt;
     if (!key) return FailAnswer(400, "a shadow layer is addressed as shadows/tiles/{level}/{x}/{y}/{z} with level 0..21", route);
@@ -347,7 +344,7 @@ HttpResponse Service::RouteShadows(const HttpRequest& request, const std::string
     if (auto denied = Deny(request, Scope::kWrite, route)) return *denied;
     return request.method == "POST" ? shadows_.Post(request, id) : shadows_.Delete(id);
   }
-  if (!get) return method_not_allowed(route, "GET, POST, DELETE");
+  if (!get) return MethodNotAllowed(request, route, "GET, POST, DELETE");
   if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
   return shadows_.Get(id);
 }

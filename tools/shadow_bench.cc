@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -23,7 +24,21 @@
 namespace pointdag {
 namespace {
 
-constexpr int kDepths[] = {8, 10};
+// Grid depths measured: 8 and 10, or the comma list in POINTDAG_SHADOW_DEPTHS (each 2..19).
+std::vector<int> Depths() {
+  std::vector<int> depths;
+  if (const char* env = std::getenv("POINTDAG_SHADOW_DEPTHS")) {
+    for (const char* p = env; *p != '\0';) {
+      char* end = nullptr;
+      const long d = std::strtol(p, &end, 10);
+      if (end == p || d < 2 || d > 19) return {};
+      depths.push_back(static_cast<int>(d));
+      p = *end == ',' ? end + 1 : end;
+    }
+    return depths;
+  }
+  return {8, 10};
+}
 constexpr int kQueries = 1 << 21;
 // A sun 45 degrees high in the south-west, travelling north-east and down.
 const Light kSun{{0.5, 0.5, -std::sqrt(0.5)}, false};
@@ -65,14 +80,17 @@ nlohmann::json ShadowCase(const std::filesystem::path& scan, int depth) {
     auto again = BuildShadowDag(*dag, kSun);
     if (again.ok()) build_s = std::min(build_s, again->stats().build_seconds);
   }
-  // What each relaxation step gains: none (undefined = lit), collapse only, collapse + matching.
+  // What each relaxation step gains: none (undefined = lit), collapse with mixed subtrees' undefined
+  // cells lit, collapse with matching (the default, collapse with the majority rule, is `shadow`).
   ShadowBuildOptions options;
   options.relax_undefined = false;
   auto unrelaxed = BuildShadowDag(*dag, kSun, options);
   options.relax_undefined = true;
-  options.match_undefined = false;
+  options.fill = UndefinedFill::kLit;
   auto collapsed = BuildShadowDag(*dag, kSun, options);
-  if (!unrelaxed.ok() || !collapsed.ok()) return {{"error", "a relaxation variant failed"}};
+  options.fill = UndefinedFill::kMatch;
+  auto matched = BuildShadowDag(*dag, kSun, options);
+  if (!unrelaxed.ok() || !collapsed.ok() || !matched.ok()) return {{"error", "a relaxation variant failed"}};
 
   // Random surface voxels: their centres, one query each; every answer checked against `exact`.
   std::mt19937_64 rng(16);
@@ -99,6 +117,7 @@ nlohmann::json ShadowCase(const std::filesystem::path& scan, int depth) {
           {"light_depth", s.light_depth},
           {"dag_bytes", s.shadow_dag_bytes},
           {"collapse_only_bytes", collapsed->stats().shadow_dag_bytes},
+          {"match_bytes", matched->stats().shadow_dag_bytes},
           {"unrelaxed_bytes", unrelaxed->stats().shadow_dag_bytes},
           {"dense_bytes", s.dense_grid_bytes},
           {"map_bytes", s.shadow_map_bytes},
@@ -108,6 +127,14 @@ nlohmann::json ShadowCase(const std::filesystem::path& scan, int depth) {
           {"rss_peak_over_baseline_bytes", peak - baseline},
           {"queries_per_s", kQueries / query_s},
           {"wrong_answers", wrong}};
+}
+
+// "n/a" where the DAG is a bare all-lit or all-shadowed root (0 bytes).
+std::string Ratio(double whole, double dag) {
+  if (dag == 0) return "n/a";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g", whole / dag);
+  return text;
 }
 
 std::string Bytes(double b) {
@@ -132,17 +159,22 @@ int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out) {
     out << "no scans in " << data_dir << "\n";
     return 1;
   }
+  const std::vector<int> depths = Depths();
+  if (depths.empty()) {
+    out << "POINTDAG_SHADOW_DEPTHS must be a comma list of depths 2..19\n";
+    return 1;
+  }
   std::sort(scans.begin(), scans.end());
   out << "machine: " << MachineName() << "; light travelling (0.5, 0.5, -0.707) (sun 45 degrees high), "
       << "light_depth = depth + 2; build and exact times best of 3; queries: " << kQueries
       << " random voxel centres, one core, best of 3\n\n"
-      << "| scan | depth | voxels | shadowed | light depth | DAG | no relax | collapse only | dense grid | "
-         "shadow map | dense / DAG | map / DAG | DAG bits/voxel | exact s | build s | peak RSS | own peak | "
-         "Mq/s | wrong |\n"
-      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      << "| scan | depth | voxels | shadowed | light depth | DAG | no relax | collapse, lit | collapse, match | "
+         "dense grid | shadow map | dense / DAG | map / DAG | DAG bits/voxel | exact s | build s | peak RSS | "
+         "own peak | Mq/s | wrong |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   int failures = 0;
   for (const auto& scan : scans) {
-    for (int depth : kDepths) {
+    for (int depth : depths) {
       const nlohmann::json r = RunIsolated(scan.filename().string(), [&] { return ShadowCase(scan, depth); });
       if (r.contains("error")) {
         out << "| " << scan.filename().string() << " | " << depth << " | error: " << r["error"].dump() << " |\n";
@@ -152,12 +184,13 @@ int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out) {
       const auto n = [&](const char* key) { return r[key].get<double>(); };
       char row[768];
       std::snprintf(row, sizeof(row),
-                    "| %s | %d | %.0f | %.0f | %d | %s | %s | %s | %s | %s | %.3g | %.3g | %.2f | %.3f | %.3f | %s | %s | "
-                    "%.2f | %.0f |\n",
+                    "| %s | %d | %.0f | %.0f | %d | %s | %s | %s | %s | %s | %s | %s | %s | %.2f | %.3f | %.3f | %s | "
+                    "%s | %.2f | %.0f |\n",
                     scan.filename().c_str(), depth, n("voxels"), n("shadowed"), r["light_depth"].get<int>(),
                     Bytes(n("dag_bytes")).c_str(), Bytes(n("unrelaxed_bytes")).c_str(),
-                    Bytes(n("collapse_only_bytes")).c_str(), Bytes(n("dense_bytes")).c_str(),
-                    Bytes(n("map_bytes")).c_str(), n("dense_bytes") / n("dag_bytes"), n("map_bytes") / n("dag_bytes"),
+                    Bytes(n("collapse_only_bytes")).c_str(), Bytes(n("match_bytes")).c_str(), Bytes(n("dense_bytes")).c_str(),
+                    Bytes(n("map_bytes")).c_str(), Ratio(n("dense_bytes"), n("dag_bytes")).c_str(),
+                    Ratio(n("map_bytes"), n("dag_bytes")).c_str(),
                     8 * n("dag_bytes") / n("voxels"), n("exact_s"), n("build_s"),
                     Bytes(n("rss_peak_over_baseline_bytes")).c_str(), Bytes(n("own_peak_bytes")).c_str(),
                     n("queries_per_s") / 1e6, n("wrong_answers"));

@@ -1,6 +1,7 @@
 // `pointdag bench --shadow DIR` (issue #16): the light-space shadow DAG on every scan of DIR at two
-// resolutions, one sun-like light: sizes against the dense grid and a plain shadow map, what each
-// relaxation step of the undefined cells gains, build time and memory, queries per second.
+// resolutions (grid depth 8 and 10; POINTDAG_SHADOW_DEPTHS=8,10,12 chooses others), one sun-like
+// light: sizes against the dense grid and a plain shadow map, what each relaxation step of the
+// undefined cells gains, build time and memory, queries per second.
 #pragma once
 
 #include <filesystem>

@@ -142,13 +142,14 @@ TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
       const auto exact = ShadowedVoxels(dag, light);
       ASSERT_TRUE(exact.ok()) << exact.status().ToString();
       std::vector<uint64_t> sizes;
-      for (const auto& [relax, match] : {std::pair{false, false}, {true, false}, {true, true}}) {
+      for (const auto& [relax, fill] : {std::pair{false, UndefinedFill::kLit}, {true, UndefinedFill::kLit},
+                                        {true, UndefinedFill::kMajority}, {true, UndefinedFill::kMatch}}) {
         ShadowBuildOptions options;
         options.relax_undefined = relax;
-        options.match_undefined = match;
+        options.fill = fill;
         auto shadow = BuildShadowDag(dag, light, options);
         ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
-        EXPECT_EQ(Mismatches(*shadow, dag, *exact), 0u) << name << " relax " << relax << " match " << match;
+        EXPECT_EQ(Mismatches(*shadow, dag, *exact), 0u) << name << " relax " << relax << " fill " << int(fill);
         EXPECT_EQ(shadow->stats().shadowed_voxels, static_cast<uint64_t>(std::count(exact->begin(), exact->end(), 1)));
         sizes.push_back(shadow->stats().shadow_dag_bytes);
 

@@ -200,6 +200,26 @@ TEST(ShadowedVoxels, GrazingEdgesAgreeWithBruteForce) {
   }
 }
 
+// The definition's consequence for flat ground: a voxel's ray leaves its cell through a side face
+// (into the neighbour) when the light is lower than 45 degrees along an axis, through the top when
+// higher. So a one-voxel plane is self-shadowed except its first column below 45 degrees, and lit above.
+TEST(ShadowedVoxels, FlatGroundShadowsItselfBelowFortyFiveDegrees) {
+  std::vector<uint64_t> codes;
+  for (uint32_t x = 0; x < 32; ++x) {
+    for (uint32_t y = 0; y < 32; ++y) codes.push_back(MortonEncode(x, y, 0));
+  }
+  std::sort(codes.begin(), codes.end());
+  const Svdag dag = DagOf(codes, kPlaneDepth);
+  const double pi = std::acos(-1.0);
+  for (double degrees : {40.0, 50.0}) {
+    const double e = degrees * pi / 180;
+    const Light light = MakeLight(std::cos(e), 0, -std::sin(e));  // travels +x: rays run to -x
+    std::vector<uint8_t> want;
+    for (uint64_t code : codes) want.push_back(degrees < 45 && MortonDecode(code)[0] > 0 ? 1 : 0);
+    ExpectSame(Shadows(dag, light), want, codes, "elevation " + std::to_string(degrees));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Brute force on random clutter (no data needed) and on real scans.
 
@@ -211,13 +231,24 @@ TEST(ShadowedVoxels, RandomClutterAgreesWithBruteForce) {
   std::sort(codes.begin(), codes.end());
   codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
   std::normal_distribution<double> gauss;
-  std::vector<std::array<double, 3>> directions = {{0, 0, -1}, {1, 1, -1}, {-1, 1, 1}, {1, 2, -2}, {0, 1, 0}};
+  // Besides grazing diagonals: components so small that their inverses overflow to infinity.
+  std::vector<std::array<double, 3>> directions = {{0, 0, -1}, {1, 1, -1}, {-1, 1, 1}, {1, 2, -2}, {0, 1, 0},
+                                                   {1e-320, -1e-310, -1}, {1, 1e-300, 1e-300}};
   for (int i = 0; i < 6; ++i) directions.push_back({gauss(rng), gauss(rng), gauss(rng)});
-  for (int depth : {4, 6}) {  // 6: the same voxels in a corner of a bigger grid, more levels above
-    const Svdag dag = DagOf(codes, depth);
+  // The same voxels in a 16^3 grid, in a corner of a 64^3 one (more levels above), and in the far
+  // corner of a 2^21 grid, where coordinates near 2^21 test the slab test's rounding margin.
+  for (int depth : {4, 6, kMaxDepth}) {
+    const uint32_t shift = depth == kMaxDepth ? (1u << depth) - 16 : 0;
+    std::vector<uint64_t> placed;
+    for (uint64_t code : codes) {
+      const Cell c = MortonDecode(code);
+      placed.push_back(MortonEncode(c[0] + shift, c[1] + shift, c[2] + shift));
+    }
+    std::sort(placed.begin(), placed.end());
+    const Svdag dag = DagOf(placed, depth);
     for (const auto& d : directions) {
       const Light light = MakeLight(d[0], d[1], d[2]);
-      ExpectSame(Shadows(dag, light), BruteForce(codes, light), codes, "clutter depth " + std::to_string(depth));
+      ExpectSame(Shadows(dag, light), BruteForce(placed, light), placed, "clutter depth " + std::to_string(depth));
     }
   }
 }
@@ -252,6 +283,10 @@ TEST_P(ScanShadows, AgreeWithBruteForceOnEveryVoxel) {
                "direction (" + std::to_string(d[0]) + ", " + std::to_string(d[1]) + ", " + std::to_string(d[2]) + ")");
     for (uint8_t s : got) shadowed_total += s;
   }
+  // A mipmap-mode DAG of the same voxels: the same answers in the same (Morton) order.
+  const Svdag mip = DagOf(codes, grid->depth, CountMode::kMipmap);
+  const Light sun = MakeLight(directions.back()[0], directions.back()[1], directions.back()[2]);
+  EXPECT_EQ(Shadows(mip, sun), Shadows(dag, sun));
   // Real geometry: some voxels lit, some shadowed.
   EXPECT_GT(shadowed_total, 0u);
   EXPECT_LT(shadowed_total, codes.size() * directions.size());
@@ -290,6 +325,11 @@ TEST(ShadowedVoxels, BelowHorizonShadowsEverythingAndBadLightsAreRefused) {
     ASSERT_FALSE(counts.ok());
     EXPECT_EQ(counts.status().code(), StatusCode::kInvalidArgument);
   }
+  Svdag too_deep = dag;
+  too_deep.depth = 22;
+  auto refused = ShadowedVoxels(too_deep, MakeLight(0, 0, -1));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(LitSampleCounts, IsTheSumOfLitAnswers) {
@@ -340,7 +380,15 @@ TEST(ShadowedVoxelsSpeed, ScansAtTheirBenchmarkVoxelSizes) {
   };
   // The sun at 35 degrees elevation in the south-east (azimuth 135): it travels north-west and down.
   const Light sun = MakeLight(-0.579, 0.579, -0.574);
-  std::printf("| scan | voxel | depth | voxels | shadowed | 1 thread s | voxels/s | 2 threads s | voxels/s |\n");
+  // Sun hours: 24 samples of a day's arc (elevation 10..80..10 degrees, azimuth 90..270).
+  std::vector<Light> day;
+  const double pi = std::acos(-1.0);
+  for (int i = 0; i < 24; ++i) {
+    const double f = (i + 0.5) / 24, azimuth = pi / 2 + f * pi, elevation = (10 + 70 * std::sin(f * pi)) * pi / 180;
+    day.push_back(MakeLight(-std::sin(azimuth) * std::cos(elevation), -std::cos(azimuth) * std::cos(elevation),
+                            -std::sin(elevation)));
+  }
+  std::printf("| scan | voxel | depth | voxels | shadowed | 1 thread s | voxels/s | 2 threads s | voxels/s | 24 samples, 2 threads s |\n");
   for (const auto& scan : scans) {
     auto reader = OpenScan(testing::DataDir() / scan.file);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
@@ -360,9 +408,12 @@ TEST(ShadowedVoxelsSpeed, ScansAtTheirBenchmarkVoxelSizes) {
         shadowed = static_cast<size_t>(std::count(result.begin(), result.end(), 1));
       }
     }
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_TRUE(LitSampleCounts(dag, day, 2).ok());
+    const double hours = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double n = static_cast<double>(grid->morton.size());
-    std::printf("| %s | %g | %d | %zu | %zu | %.3f | %.0f | %.3f | %.0f |\n", scan.file, scan.voxel, grid->depth,
-                grid->morton.size(), shadowed, best[0], n / best[0], best[1], n / best[1]);
+    std::printf("| %s | %g | %d | %zu | %zu | %.3f | %.0f | %.3f | %.0f | %.2f |\n", scan.file, scan.voxel, grid->depth,
+                grid->morton.size(), shadowed, best[0], n / best[0], best[1], n / best[1], hours);
   }
 }
 

@@ -193,6 +193,44 @@ TEST(HostileServer, TilesThatAreNotWhatTheyShouldBeAreErrors) {
   }
 }
 
+// Shadow layers (PROTOCOL §3.2) from the attacker: each is checked against its tile's own voxel
+// count before anything is allocated; an honest one lands voxel for voxel in `light`.
+TEST(HostileServer, ShadowLayersThatLieAreErrors) {
+  const std::string shaded = kDataset.substr(0, kDataset.size() - 1) + R"(, "shadows": {"kind": "direction", "samples": 1}})";
+  const auto layer_of = [](uint32_t n, uint8_t value) {
+    const auto bytes = EncodeShadowLayer({ShadowKind::kDirection, 1, std::vector<uint8_t>(n, value)}).value();
+    return std::string(bytes.begin(), bytes.end());
+  };
+  const auto serving = [&](const std::string& dataset, const std::string& layer) {
+    return [=](const std::string& target) {
+      if (target.find("/shadows/tiles/") != std::string::npos) return Answer(layer);
+      return Serving(dataset, kRootPage, PdagTile(4))(target);
+    };
+  };
+  {
+    HostileServer honest(serving(shaded, layer_of(4096, 255)));
+    const auto fetched = client::FetchDataset(honest.Url(), std::nullopt, {}, {}, true);
+    ASSERT_TRUE(fetched.ok()) << fetched.status().ToString();
+    EXPECT_EQ(fetched->light, std::vector<uint8_t>(4096, 255));
+  }
+  std::string huge = layer_of(4096, 0);
+  huge[8] = huge[9] = huge[10] = huge[11] = '\xFF';  // 2^32 - 1 voxels claimed for a tile of 4096
+  const std::pair<std::string, std::string> cases[] = {
+      {layer_of(4095, 255), "covers 4095 voxels; its tile has 4096"},
+      {huge, "covers 4294967295 voxels; its tile has 4096"},
+      {"<html><body>Not a layer</body></html>", "not a shadow layer"},
+  };
+  for (const auto& [layer, reason] : cases) {
+    HostileServer server(serving(shaded, layer));
+    const Status status = client::FetchDataset(server.Url(), std::nullopt, {}, {}, true).status();
+    EXPECT_EQ(status.code(), StatusCode::kMalformed) << status.ToString();
+    EXPECT_NE(status.message().find(reason), std::string::npos) << status.ToString();
+    EXPECT_NE(status.message().find("shadows/tiles/1/1/0/0"), std::string::npos) << status.ToString();
+  }
+  HostileServer unshaded(serving(kDataset, layer_of(4096, 255)));
+  EXPECT_EQ(client::FetchDataset(unshaded.Url(), std::nullopt, {}, {}, true).status().code(), StatusCode::kInvalidArgument);
+}
+
 TEST(HostileServer, TooManyPagesOrTilesAreResourceLimits) {
   const std::string dataset = R"({"levels": 10, "tile_depth": 4, "bounds": {"min": [0, 0, 0]}, "voxel_size": 1.0})";
   std::string page = R"({"tiles": [], "pages": [)";

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <thread>
@@ -416,6 +417,10 @@ TEST(ShadowCrash, KillNineDuringShadowsJobsLeavesTheOldSetOrTheNewNeverHalf) {
     ASSERT_EQ(q("SELECT COUNT(*) FROM shadow_tiles l JOIN tiles t ON t.dataset_id = l.dataset_id AND t.level = l.level AND "
                 "t.x = l.x AND t.y = l.y AND t.z = l.z WHERE l.dataset_id = '" + id + "'"), tile_count);
     replaced += holder == job;
+    // pointdagd --check agrees: every set whole, every layer sound.
+    const std::string check = std::string(POINTDAGD) + " --data-dir " + daemon.var().string() + " --check > /dev/null 2>&1";
+    const int checked = std::system(check.c_str());
+    ASSERT_TRUE(WIFEXITED(checked) && WEXITSTATUS(checked) == 0) << "iteration " << i << ": pointdagd --check failed";
     // The restart resumes the job; it ends with the new set.
     ASSERT_TRUE(daemon.Start());
     c = daemon.Connect();
@@ -438,6 +443,39 @@ TEST(ShadowCrash, KillNineDuringShadowsJobsLeavesTheOldSetOrTheNewNeverHalf) {
   summary += " the new set already committed at " + std::to_string(replaced) + " kills, the old one whole at the rest";
   std::printf("%s\n", summary.c_str());
   RecordProperty("summary", summary);
+}
+
+// pointdagd --check sees a shadow set that is not whole: a missing layer, a damaged one.
+TEST(ShadowCheck, ReportsAMissingAndADamagedLayer) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir scratch;
+  Daemon daemon(scratch.path());
+  ASSERT_TRUE(daemon.Start());
+  std::string id;
+  {
+    auto c = daemon.Connect();
+    const nlohmann::json ingest = WaitForJob(*c, SubmitScan(*c, "autzen_trim_pdrf3_rgb.las", "name=check&voxel=0.5"));
+    ASSERT_EQ(ingest["status"], "done");
+    id = ingest["dataset_id"].get<std::string>();
+    const Response posted = Post(*c, "/v1/datasets/" + id + "/shadows", R"({"direction": [0, 0, -1]})");
+    ASSERT_EQ(WaitForJob(*c, posted.Header("location"))["status"], "done");
+  }
+  daemon.Stop(SIGTERM);
+  const auto check = [&] {
+    std::string out;
+    FILE* pipe = popen((std::string(POINTDAGD) + " --data-dir " + daemon.var().string() + " --check 2>&1").c_str(), "r");
+    char buffer[4096];
+    for (size_t n; pipe && (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;) out.append(buffer, n);
+    const int status = pipe ? pclose(pipe) : -1;
+    return std::pair{WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  };
+  EXPECT_EQ(check().first, 0) << check().second;
+  ASSERT_TRUE(testing::ExecSql(daemon.store(), "DELETE FROM shadow_tiles WHERE level = 1 AND rowid = (SELECT MIN(rowid) FROM shadow_tiles WHERE level = 1)"));
+  ASSERT_TRUE(testing::ExecSql(daemon.store(), "UPDATE shadow_tiles SET bytes = zeroblob(20) WHERE level = 0"));
+  const auto [code, out] = check();
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(out.find("the shadow set of dataset " + id + " has "), std::string::npos) << out;
+  EXPECT_NE(out.find("shadow layer 0/0/0/0 of dataset " + id + ": its bytes do not match their checksum"), std::string::npos) << out;
 }
 
 }  // namespace

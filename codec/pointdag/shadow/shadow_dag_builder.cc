@@ -10,10 +10,14 @@
 // a comparison, never a wrong merge.
 //
 // Relaxation (Sintorn et al. 2014): a subtree whose defined cells are all lit is lit, all shadowed
-// is shadowed. Kämpe et al. 2015: in a mixed brick, the undefined bits copy a recently used brick
-// that agrees on the defined bits, else a brick that already exists with the undefined bits all
-// lit or all shadowed; in a mixed node the undefined children become all lit or all shadowed,
-// whichever repeats an existing node. Failing a match, undefined becomes lit.
+// is shadowed. In a subtree holding both, the undefined cells follow options.fill: kMajority (the
+// default) gives a brick's undefined bits the value most of its defined bits have, a node's
+// undefined children the value most of its all-lit / all-shadowed children have: the same input
+// always resolves alike, and shadow boundaries stay smooth. kMatch follows Kämpe et al. 2015's aim
+// instead: a mixed brick copies a recently used brick that agrees on the defined bits, else an
+// existing one with the undefined bits all lit or all shadowed; a mixed node's undefined children
+// become all lit or all shadowed, whichever repeats an existing node; failing a match, lit. On the
+// scans of ../shared/data kMatch came out 1-10% larger than kMajority (docs/benchmarks.md).
 #include <xxhash.h>
 
 #include <algorithm>
@@ -114,7 +118,11 @@ class Builder {
     if (value == 0) return kLit;
     if (value == (relax ? defined : ~uint64_t{0})) return kShadowed;
     uint64_t brick = value;  // undefined bits lit
-    if (relax && options_.match_undefined) {
+    if (relax && options_.fill == UndefinedFill::kMajority &&
+        2 * __builtin_popcountll(value) > __builtin_popcountll(defined)) {
+      brick = value | ~defined;
+    }
+    if (relax && options_.fill == UndefinedFill::kMatch) {
       const auto hit = std::find_if(cache_.begin(), cache_.end(), [&](uint64_t b) { return (b & defined) == value; });
       if (hit != cache_.end()) {
         brick = *hit;
@@ -129,10 +137,11 @@ class Builder {
   uint32_t ResolveNode(int height, std::array<uint32_t, 8> child) {
     const bool relax = options_.relax_undefined;
     if (!relax) child = Filled(child, kLit);
-    bool lit = false, shadowed = false, node = false, undefined = false;
+    int lit = 0, shadowed = 0;
+    bool node = false, undefined = false;
     for (uint32_t c : child) {
-      lit |= c == kLit;
-      shadowed |= c == kShadowed;
+      lit += c == kLit;
+      shadowed += c == kShadowed;
       node |= IsNode(c);
       undefined |= c == kUndefined;
     }
@@ -140,7 +149,8 @@ class Builder {
     if (!node && !shadowed) return kLit;
     if (!node && !lit) return kShadowed;
     uint32_t fill = kLit;
-    if (options_.match_undefined && undefined) {
+    if (options_.fill == UndefinedFill::kMajority && shadowed > lit) fill = kShadowed;
+    if (options_.fill == UndefinedFill::kMatch && undefined) {
       if (FindNode(height, Filled(child, kLit)) == kNotFound && FindNode(height, Filled(child, kShadowed)) != kNotFound) {
         fill = kShadowed;
       }

@@ -13,6 +13,13 @@ namespace {
 constexpr double kMargin = 1e-5;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// Set bits of each byte: a child's rank among its siblings (the build has no popcnt instruction).
+constexpr std::array<uint8_t, 256> kBits = [] {
+  std::array<uint8_t, 256> bits{};
+  for (int i = 1; i < 256; ++i) bits[i] = static_cast<uint8_t>(bits[i >> 1] + (i & 1));
+  return bits;
+}();
+
 std::array<uint32_t, 3> ChildCorner(const std::array<uint32_t, 3>& lo, uint32_t octant, uint32_t half) {
   return {lo[0] + ((octant >> 2) & 1u) * half, lo[1] + ((octant >> 1) & 1u) * half, lo[2] + (octant & 1u) * half};
 }
@@ -26,14 +33,6 @@ ShadowRayCaster::ShadowRayCaster(const Svdag& dag, const std::array<double, 3>& 
     inv_[a] = flat_[a] ? 0 : -1 / travel[a];
     if (travel[a] > 0) flip_ |= 1u << (2 - a);  // the ray runs towards lower coordinates
   }
-  stack_.reserve(static_cast<size_t>(8 * (dag.depth + 1)));
-}
-
-bool ShadowRayCaster::ChildSlabs::Reach(uint32_t octant) const {
-  const uint32_t bx = (octant >> 2) & 1u, by = (octant >> 1) & 1u, bz = octant & 1u;
-  const double t0 = std::max(std::max(enter[0][bx], enter[1][by]), std::max(enter[2][bz], 0.0));
-  const double t1 = std::min(std::min(exit[0][bx], exit[1][by]), exit[2][bz]);
-  return t0 <= t1;
 }
 
 void ShadowRayCaster::Slabs(const std::array<uint32_t, 3>& lo, uint32_t half, ChildSlabs& slabs) const {
@@ -74,19 +73,33 @@ bool ShadowRayCaster::BrickBlocks(uint64_t brick, const std::array<uint32_t, 3>&
   return false;
 }
 
+void ShadowRayCaster::FindOwnBrick(const std::array<uint32_t, 3>& voxel) {
+  const std::array<uint32_t, 3> lo{voxel[0] & ~3u, voxel[1] & ~3u, voxel[2] & ~3u};
+  if (lo == own_lo_) return;
+  uint32_t ref = 0;
+  for (int level = 0; level < dag_.depth - 2; ++level) {
+    const int shift = dag_.depth - 1 - level;
+    const uint32_t octant = ((voxel[0] >> shift) & 1u) << 2 | ((voxel[1] >> shift) & 1u) << 1 | ((voxel[2] >> shift) & 1u);
+    ref = dag_.nodes[ref + 1 + kBits[dag_.Mask(ref) & ((1u << octant) - 1)]];
+  }
+  own_lo_ = lo;
+  own_ref_ = ref;
+}
+
 bool ShadowRayCaster::Blocked(const std::array<uint32_t, 3>& voxel) {
   if (dag_.leaves.empty()) return false;
   self_ = voxel;
   for (int a = 0; a < 3; ++a) origin_[a] = voxel[a] + 0.5;
+  FindOwnBrick(voxel);
+  if (BrickBlocks(dag_.leaves[own_ref_], own_lo_)) return true;
   const int brick_level = dag_.depth - 2;
-  stack_.clear();
-  stack_.push_back({0, 0, {0, 0, 0}});
+  size_t top = 0;
+  stack_[top++] = {0, 0, {0, 0, 0}};
   ChildSlabs slabs;
-  while (!stack_.empty()) {
-    const Entry e = stack_.back();
-    stack_.pop_back();
+  while (top) {
+    const Entry e = stack_[--top];
     if (e.level == brick_level) {
-      if (BrickBlocks(dag_.leaves[e.ref], e.lo)) return true;
+      if (e.lo != own_lo_ && BrickBlocks(dag_.leaves[e.ref], e.lo)) return true;
       continue;
     }
     const uint32_t half = uint32_t{1} << (dag_.depth - e.level - 1);
@@ -96,8 +109,8 @@ bool ShadowRayCaster::Blocked(const std::array<uint32_t, 3>& voxel) {
     for (int i = 7; i >= 0; --i) {
       const uint32_t octant = static_cast<uint32_t>(i) ^ flip_;
       if (!((mask >> octant) & 1u) || !slabs.Reach(octant)) continue;
-      const uint32_t rank = static_cast<uint32_t>(__builtin_popcount(mask & ((1u << octant) - 1)));
-      stack_.push_back({dag_.nodes[e.ref + 1 + rank], e.level + 1, ChildCorner(e.lo, octant, half)});
+      const uint32_t rank = kBits[mask & ((1u << octant) - 1)];
+      stack_[top++] = {dag_.nodes[e.ref + 1 + rank], e.level + 1, ChildCorner(e.lo, octant, half)};
     }
   }
   return false;

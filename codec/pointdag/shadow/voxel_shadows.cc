@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #include "pointdag/shadow/shadow_ray.h"
@@ -14,7 +15,7 @@ namespace pointdag {
 namespace {
 
 constexpr size_t kMaxLights = 65535;  // counts are 16-bit
-constexpr size_t kBlock = 512;        // voxels a worker takes at a time (Morton neighbours: coherent rays)
+constexpr size_t kBlock = 512;        // voxels a worker takes at a time (Morton neighbours share bricks)
 
 Status CheckLight(const Light& light) {
   if (light.below_horizon) return Status::Ok();
@@ -23,6 +24,13 @@ Status CheckLight(const Light& light) {
     return InvalidArgument("light direction has a NaN or infinite component");
   }
   if (t[0] == 0 && t[1] == 0 && t[2] == 0) return InvalidArgument("light direction (0, 0, 0) has no direction");
+  return Status::Ok();
+}
+
+Status CheckDag(const Svdag& dag) {
+  if (dag.depth < 2 || dag.depth > kMaxDepth) {
+    return InvalidArgument("DAG depth " + std::to_string(dag.depth) + " is outside 2..21");
+  }
   return Status::Ok();
 }
 
@@ -45,7 +53,13 @@ void CastAll(const Svdag& dag, const Light& light, const std::vector<uint64_t>& 
   };
   const int workers = WorkerCount(threads, codes.size());
   std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  for (int w = 1; w < workers; ++w) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: the workers running take the remaining blocks
+    }
+  }
   work();
   for (auto& t : pool) t.join();
 }
@@ -73,6 +87,7 @@ bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 
 }
 
 StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads) {
+  RETURN_IF_ERROR(CheckDag(dag));
   RETURN_IF_ERROR(CheckLight(light));
   const std::vector<uint64_t> codes = dag.MortonCodes();
   std::vector<uint8_t> shadowed(codes.size(), 1);
@@ -84,6 +99,7 @@ StatusOr<std::vector<uint16_t>> LitSampleCounts(const Svdag& dag, std::span<cons
   if (lights.size() > kMaxLights) {
     return InvalidArgument(std::to_string(lights.size()) + " light samples; at most 65535 are counted");
   }
+  RETURN_IF_ERROR(CheckDag(dag));
   for (const Light& light : lights) RETURN_IF_ERROR(CheckLight(light));
   const std::vector<uint64_t> codes = dag.MortonCodes();
   std::vector<uint16_t> lit(codes.size(), 0);

@@ -28,9 +28,10 @@ namespace pointdag {
 bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 3>& travel,
                   const std::array<uint32_t, 3>& cell);
 
-// One byte per voxel, 1 = shadowed, 0 = lit, in Morton order. kInvalidArgument for a light whose
-// travel is NaN, infinite or zero (unless below the horizon). `threads`: worker threads, 0 = one
-// per core; the answer never depends on it.
+// One byte per voxel, 1 = shadowed, 0 = lit, in Morton order. `dag` is well formed (built here,
+// or decoded and Validate()d). kInvalidArgument for a depth outside 2..21 or a light whose travel
+// is NaN, infinite or zero (unless below the horizon). `threads`: worker threads, 0 = one per
+// core; the answer never depends on it. Cost: one ray per voxel, skipping empty octants.
 StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads = 0);
 
 // Sun hours: per voxel, how many of `lights` light it (0..lights.size(), at most 65535 lights,
