@@ -162,8 +162,12 @@ TEST_F(ShadowServer, EveryRouteAnswersItsStatusAndMessage) {
     EXPECT_EQ(ErrorOf(r).rfind(message, 0), 0u) << body << " -> " << ErrorOf(r);
   }
   EXPECT_NE(ErrorOf(Post(*c, tiny + "/shadows", R"({"time": "2026-06-21T12:00:00Z"})")).find("give a direction"), std::string::npos);
-  // Nothing was queued by any of them.
+  // Nothing was queued by any of them; metrics count the routes by template.
   EXPECT_EQ(c->Request("GET", tiny + "/shadows")->status, 404);
+  const std::string metrics = c->Request("GET", "/metrics")->body;
+  for (const char* label : {R"(route="/v1/datasets/{id}/shadows",status="400")", R"(route="/v1/datasets/{id}/shadows/tiles",status="404")"}) {
+    EXPECT_NE(metrics.find(label), std::string::npos) << label;
+  }
   // The client asked for shadows a dataset lacks.
   const auto fetched = client::FetchDataset("http://127.0.0.1:" + std::to_string(daemon_->port()) + tiny, std::nullopt, {}, {}, true);
   EXPECT_EQ(fetched.status().code(), StatusCode::kInvalidArgument);
