@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
+#include <span>
 #include <map>
 
 #include "pointdag/dag/dag_builder.h"
@@ -70,9 +72,22 @@ StatusOr<FinestVoxels> LoadFinestVoxels(Store& store, const std::string& dataset
   return out;
 }
 
-// Per voxel, how many of the plan's lights light it.
-StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const ShadowPlan& plan) {
-  if (plan.lights.size() > 1) return LitSampleCounts(dag, plan.lights);
+// Per voxel, how many of the plan's lights light it. Several lights go in about 20 groups, each
+// reported to `done(fraction)`, so that a long sun-hours job shows its progress.
+StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const ShadowPlan& plan, const std::function<void(double)>& done) {
+  if (plan.lights.size() > 1) {
+    const std::span<const Light> lights(plan.lights);
+    const size_t group = (lights.size() + 19) / 20;
+    std::vector<uint16_t> lit;
+    for (size_t first = 0; first < lights.size(); first += group) {
+      ASSIGN_OR_RETURN(const std::vector<uint16_t> part, LitSampleCounts(dag, lights.subspan(first, std::min(group, lights.size() - first))));
+      if (lit.empty()) lit.assign(part.size(), 0);
+      if (part.size() != lit.size()) return Internal("the shadow pass answered for different voxel counts");
+      for (size_t i = 0; i < lit.size(); ++i) lit[i] = static_cast<uint16_t>(lit[i] + part[i]);
+      done(static_cast<double>(first + group) / static_cast<double>(lights.size()));
+    }
+    return lit;
+  }
   ASSIGN_OR_RETURN(const std::vector<uint8_t> shadowed, ShadowedVoxels(dag, plan.lights.front()));
   std::vector<uint16_t> lit(shadowed.size());
   std::transform(shadowed.begin(), shadowed.end(), lit.begin(), [](uint8_t s) { return static_cast<uint16_t>(s ? 0 : 1); });
@@ -93,7 +108,8 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   const uint64_t n = finest.morton.size();
   progress("shadows", 20, n);
   ASSIGN_OR_RETURN(const Svdag dag, BuildDag(finest.morton, finest.depth));
-  ASSIGN_OR_RETURN(const std::vector<uint16_t> lit, LitCounts(dag, plan));
+  ASSIGN_OR_RETURN(const std::vector<uint16_t> lit,
+                   LitCounts(dag, plan, [&](double fraction) { progress("shadows", 20 + 70 * std::min(fraction, 1.0), n); }));
   if (lit.size() != n) return Internal("the shadow pass answered for " + std::to_string(lit.size()) + " of " + std::to_string(n) + " voxels");
   progress("layers", 90, n);
   const int samples = static_cast<int>(plan.lights.size());

@@ -17,6 +17,7 @@
 #include "daemon_util.h"
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/shadow/shadow_layer.h"
+#include "pointdag/shadow/solar_position.h"
 #include "pointdag/shadow/voxel_shadows.h"
 #include "store.h"
 #include "store_util.h"
@@ -55,6 +56,31 @@ std::map<TileKey, uint64_t> AllTiles(client::Connection& c, const std::string& d
 std::string LayerTarget(const std::string& dataset, const TileKey& k) {
   return dataset + "/shadows/tiles/" + std::to_string(k.level) + "/" + std::to_string(k.x) + "/" + std::to_string(k.y) + "/" +
          std::to_string(k.z);
+}
+
+// Every served layer of `dataset` equals `expected` (its kind, its bytes of light), is answered with
+// the layer's headers, and decodes against its tile's count; the layers' bytes together.
+uint64_t ExpectServedLayers(client::Connection& c, const std::string& dataset, const std::vector<TileShadowLayer>& expected) {
+  const std::map<TileKey, uint64_t> tiles = AllTiles(c, dataset, Json(*c.Request("GET", dataset))["levels"].get<int>());
+  EXPECT_EQ(expected.size(), tiles.size());
+  uint64_t bytes = 0;
+  for (const TileShadowLayer& want : expected) {
+    const std::string target = LayerTarget(dataset, want.key);
+    SCOPED_TRACE(target);
+    const Response r = *c.Request("GET", target);
+    EXPECT_EQ(r.status, 200);
+    EXPECT_EQ(r.Header("content-type"), "application/vnd.pointdag.shadow");
+    EXPECT_EQ(r.Header("etag"), server::TileEtag(Bytes(r.body)));
+    EXPECT_EQ(r.Header("cache-control"), "no-cache");
+    const auto layer = DecodeShadowLayer(Bytes(r.body), tiles.count(want.key) ? tiles.at(want.key) : 0);
+    EXPECT_TRUE(layer.ok()) << layer.status().ToString();
+    if (!layer.ok()) continue;
+    EXPECT_EQ(layer->kind, want.layer.kind);
+    EXPECT_EQ(layer->samples, want.layer.samples);
+    EXPECT_EQ(layer->light, want.layer.light);
+    bytes += r.body.size();
+  }
+  return bytes;
 }
 
 class ShadowServer : public ::testing::Test {
@@ -136,8 +162,12 @@ TEST_F(ShadowServer, EveryRouteAnswersItsStatusAndMessage) {
     EXPECT_EQ(ErrorOf(r).rfind(message, 0), 0u) << body << " -> " << ErrorOf(r);
   }
   EXPECT_NE(ErrorOf(Post(*c, tiny + "/shadows", R"({"time": "2026-06-21T12:00:00Z"})")).find("give a direction"), std::string::npos);
-  // Nothing was queued by any of them.
+  // Nothing was queued by any of them; metrics count the routes by template.
   EXPECT_EQ(c->Request("GET", tiny + "/shadows")->status, 404);
+  const std::string metrics = c->Request("GET", "/metrics")->body;
+  for (const char* label : {R"(route="/v1/datasets/{id}/shadows",status="400")", R"(route="/v1/datasets/{id}/shadows/tiles",status="404")"}) {
+    EXPECT_NE(metrics.find(label), std::string::npos) << label;
+  }
   // The client asked for shadows a dataset lacks.
   const auto fetched = client::FetchDataset("http://127.0.0.1:" + std::to_string(daemon_->port()) + tiny, std::nullopt, {}, {}, true);
   EXPECT_EQ(fetched.status().code(), StatusCode::kInvalidArgument);
@@ -176,21 +206,27 @@ TEST_F(ShadowServer, TimesAreCheckedOnAGeoreferencedDataset) {
   EXPECT_GT(summary["sun"]["elevation_deg"].get<double>(), 60);
   EXPECT_FALSE(summary["sun"]["below_horizon"].get<bool>());
   EXPECT_LT(summary["direction"][2].get<double>(), -0.8);  // travelling down
-  job = Shade(*c, autzen, R"({"time": "2026-06-21T12:00:00-07:00", "until": "2026-06-21T18:00:00-07:00", "samples": 4})");
+  job = Shade(*c, autzen, R"({"time": "2026-06-21T12:00:00-07:00", "until": "2026-06-21T18:00:00-07:00", "samples": 25})");
   ASSERT_EQ(job["status"], "done") << job.dump();
   summary = Json(*c->Request("GET", autzen + "/shadows"));
   EXPECT_EQ(summary["kind"], "sun_hours");
-  EXPECT_EQ(summary["samples"], 4);
+  EXPECT_EQ(summary["samples"], 25);
   EXPECT_EQ(summary["until"], "2026-06-22T01:00:00Z");
   EXPECT_DOUBLE_EQ(summary["hours"].get<double>(), 6.0);
-  EXPECT_EQ(job["params"], nlohmann::json::parse(R"({"time": "2026-06-21T12:00:00-07:00", "until": "2026-06-21T18:00:00-07:00", "samples": 4})"));
-  // Its layers say so: kind 1, 4 samples.
-  const Response layer = *c->Request("GET", autzen + "/shadows/tiles/0/0/0/0");
-  ASSERT_EQ(layer.status, 200);
-  const auto root = DecodeShadowLayer(Bytes(layer.body), AllTiles(*c, autzen, 1).at(TileKey{}));
-  ASSERT_TRUE(root.ok()) << root.status().ToString();
-  EXPECT_EQ(root->kind, ShadowKind::kSunHours);
-  EXPECT_EQ(root->samples, 4);
+  EXPECT_EQ(job["params"], nlohmann::json::parse(R"({"time": "2026-06-21T12:00:00-07:00", "until": "2026-06-21T18:00:00-07:00", "samples": 25})"));
+  // Its layers (the job counts its 25 suns in groups) equal LitSampleCounts of all 25 at once.
+  const nlohmann::json meta = Json(*c->Request("GET", autzen));
+  const auto lights = SunLights(*ParseUtcTime("2026-06-21T12:00:00-07:00"), *ParseUtcTime("2026-06-21T18:00:00-07:00"), 25,
+                                meta["frame"]["enu_origin"]["lat"].get<double>(), meta["frame"]["enu_origin"]["lon"].get<double>());
+  ASSERT_TRUE(lights.ok());
+  const auto finest = client::FetchDataset("http://127.0.0.1:" + std::to_string(daemon_->port()) + autzen, std::nullopt);
+  ASSERT_TRUE(finest.ok()) << finest.status().ToString();
+  const auto counts = LitSampleCounts(*BuildDag(finest->grid.morton, finest->grid.depth), *lights);
+  ASSERT_TRUE(counts.ok());
+  const auto expected = ComputeTileLayers(finest->grid.morton, finest->grid.depth, *counts, ShadowKind::kSunHours, 25,
+                                          meta["tile_depth"].get<int>());
+  ASSERT_TRUE(expected.ok());
+  EXPECT_EQ(summary["bytes"].get<uint64_t>(), ExpectServedLayers(*c, autzen, *expected));
   // Night: every voxel in shadow.
   job = Shade(*c, autzen, R"({"time": "2026-06-21T02:00:00-07:00"})");
   ASSERT_EQ(job["status"], "done") << job.dump();
@@ -270,25 +306,8 @@ TEST_F(ShadowServer, AJobEndToEndEqualsTheDirectComputation) {
                                           meta["tile_depth"].get<int>());
   ASSERT_TRUE(expected.ok());
 
-  const std::map<TileKey, uint64_t> tiles = AllTiles(*c, autzen, meta["levels"].get<int>());
-  ASSERT_EQ(tiles.size(), meta["tile_count"].get<size_t>());
-  ASSERT_EQ(expected->size(), tiles.size());
-  uint64_t bytes = 0;
-  for (const TileShadowLayer& want : *expected) {
-    const std::string target = LayerTarget(autzen, want.key);
-    SCOPED_TRACE(target);
-    const Response r = *c->Request("GET", target);
-    ASSERT_EQ(r.status, 200);
-    EXPECT_EQ(r.Header("content-type"), "application/vnd.pointdag.shadow");
-    EXPECT_EQ(r.Header("etag"), server::TileEtag(Bytes(r.body)));
-    EXPECT_EQ(r.Header("cache-control"), "no-cache");
-    const auto layer = DecodeShadowLayer(Bytes(r.body), tiles.at(want.key));
-    ASSERT_TRUE(layer.ok()) << layer.status().ToString();
-    EXPECT_EQ(layer->kind, ShadowKind::kDirection);
-    EXPECT_EQ(layer->light, want.layer.light);
-    bytes += r.body.size();
-  }
-  EXPECT_EQ(summary["bytes"].get<uint64_t>(), bytes);
+  ASSERT_EQ(expected->size(), meta["tile_count"].get<size_t>());
+  EXPECT_EQ(summary["bytes"].get<uint64_t>(), ExpectServedLayers(*c, autzen, *expected));
   // Conditional and partial reads as for tiles.
   const std::string root = LayerTarget(autzen, TileKey{});
   const Response whole = *c->Request("GET", root);
