@@ -129,6 +129,35 @@ TEST(ShadowDag, RefusesBadOptionsAndLights) {
   EXPECT_EQ(BuildShadowDag(dag, Light{{0, 0, 0}, false}, {}).status().code(), StatusCode::kInvalidArgument);
 }
 
+TEST(ShadowDag, LightDepthLimits) {
+  // Two voxels on a depth-19 grid: light depth 21, the deepest; its dense grid is 2^60 bytes, exactly.
+  const Svdag deep = DagOf({MortonEncode(5, 5, 5), MortonEncode(5, 5, 9)}, 19);
+  auto shadow = BuildShadowDag(deep, Towards(0, 0, -1));
+  ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
+  EXPECT_EQ(shadow->stats().light_depth, 21);
+  EXPECT_EQ(shadow->stats().dense_grid_bytes, uint64_t{1} << 60);
+  EXPECT_EQ(shadow->stats().shadow_map_bytes, uint64_t{4} << 42);
+  EXPECT_TRUE(shadow->Shadowed({5.5, 5.5, 5.5}));
+  EXPECT_FALSE(shadow->Shadowed({5.5, 5.5, 9.5}));
+  ASSERT_TRUE(ShadowDag::Deserialize(shadow->Serialize()).ok());
+  ShadowBuildOptions options;
+  options.extra_levels = 3;  // light depth 22: more than 63-bit codes hold
+  EXPECT_EQ(BuildShadowDag(deep, Towards(0, 0, -1), options).status().code(), StatusCode::kInvalidArgument);
+  options.extra_levels = 9;
+  EXPECT_EQ(BuildShadowDag(BoxOnPlane(), Towards(0, 0, -1), options).status().code(), StatusCode::kInvalidArgument);
+  // Finer light grids than needed answer the same.
+  const Svdag box = BoxOnPlane();
+  const Light light = Towards(0.7, -0.2, -1);
+  const auto exact = ShadowedVoxels(box, light).value();
+  for (int extra : {3, 5, 8}) {
+    options.extra_levels = extra;
+    auto fine = BuildShadowDag(box, light, options);
+    ASSERT_TRUE(fine.ok()) << fine.status().ToString();
+    EXPECT_EQ(fine->stats().light_depth, 4 + extra);
+    EXPECT_EQ(Mismatches(*fine, box, exact), 0u) << extra;
+  }
+}
+
 // Every surface voxel of real scans at low resolution, several directions, each relaxation step
 // and a collision-prone hash: the DAG answers what ShadowedVoxels answers.
 TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
