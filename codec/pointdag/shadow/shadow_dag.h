@@ -48,6 +48,11 @@ struct ShadowBuildOptions {
   int extra_levels = 2;        // light_depth = dag.depth + extra_levels, 2..8
   bool relax_undefined = true;  // false: undefined cells count as lit (for measuring the relaxation)
   UndefinedFill fill = UndefinedFill::kMajority;
+  // true: cells whose centre is outside every voxel cube are defined too, from a light-space depth map
+  // of the cubes (shadow_free_space.cc), so a point in the air is answered truly at its cell's centre;
+  // only cells inside cubes stay undefined. Larger and slower to build; relax_undefined and fill do
+  // not apply. false (default): only the voxel centres are defined, as only surfaces are queried.
+  bool define_free_space = false;
   // Bits of the subtree hash that are kept; tests narrow it to force collisions (answers must not change).
   uint64_t hash_mask = ~uint64_t{0};
 };
