@@ -21,7 +21,7 @@
 namespace pointdag {
 namespace {
 
-uint64_t Spread2(uint32_t v) {
+constexpr uint64_t Spread2(uint32_t v) {
   uint64_t x = v;
   x = (x | x << 16) & 0x0000FFFF0000FFFFull;
   x = (x | x << 8) & 0x00FF00FF00FF00FFull;
@@ -32,7 +32,19 @@ uint64_t Spread2(uint32_t v) {
 }
 
 // A column's 2D Morton code (x' high), so a node's columns are one contiguous range.
-uint64_t Column(uint32_t x, uint32_t y) { return Spread2(x) << 1 | Spread2(y); }
+constexpr uint64_t Column(uint32_t x, uint32_t y) { return Spread2(x) << 1 | Spread2(y); }
+
+// A brick cell's (6 low Morton bits) column among the brick's 16 (4 low column bits) and its z'.
+constexpr auto kBrickColumn = [] {
+  std::array<uint8_t, 64> t{};
+  for (uint32_t b = 0; b < 64; ++b) t[b] = static_cast<uint8_t>(Column(MortonDecode(b)[0], MortonDecode(b)[1]));
+  return t;
+}();
+constexpr auto kBrickZ = [] {
+  std::array<uint8_t, 64> t{};
+  for (uint32_t b = 0; b < 64; ++b) t[b] = static_cast<uint8_t>(MortonDecode(b)[2]);
+  return t;
+}();
 
 struct Segment {
   uint64_t column;
@@ -95,13 +107,31 @@ class FreeSpaceBuild {
       at = next;
     }
     peak_bytes_ = segments.capacity() * sizeof(Segment);
+    // Per height, the least and greatest step and the count of crossed columns of every footprint.
+    pyramid_.resize(frame_.light_depth() + 1);
+    for (int height = 0; height <= frame_.light_depth(); ++height) {
+      Footprints& level = pyramid_[height];
+      for (size_t i = 0; i < columns_.size(); ++i) {
+        const uint64_t prefix = columns_[i] >> (2 * height);
+        if (level.prefix.empty() || level.prefix.back() != prefix) {
+          level.prefix.push_back(prefix);
+          level.min.push_back(steps_[i]);
+          level.max.push_back(steps_[i]);
+          level.count.push_back(0);
+        }
+        level.min.back() = std::min(level.min.back(), steps_[i]);
+        level.max.back() = std::max(level.max.back(), steps_[i]);
+        ++level.count.back();
+      }
+      peak_bytes_ += level.prefix.capacity() * 20;
+    }
   }
 
   // The centre cells (code << 1 | shadowed, sorted) whose answer is not their column's step.
   void Exceptions(std::span<const uint64_t> cells) {
     for (uint64_t cell : cells) {
       const auto [x, y, z] = MortonDecode(cell >> 1);
-      if ((z >= StepAt(x, y, 0, columns_.size())) != ((cell & 1) != 0)) exceptions_.push_back(cell);
+      if ((z >= StepAt(x, y)) != ((cell & 1) != 0)) exceptions_.push_back(cell);
     }
   }
 
@@ -112,11 +142,10 @@ class FreeSpaceBuild {
   }
 
  private:
-  uint32_t StepAt(uint32_t x, uint32_t y, size_t lo, size_t hi) const {
+  uint32_t StepAt(uint32_t x, uint32_t y) const {
     const uint64_t column = Column(x, y);
-    const auto it = std::lower_bound(columns_.begin() + static_cast<long>(lo), columns_.begin() + static_cast<long>(hi), column);
-    return it != columns_.begin() + static_cast<long>(hi) && *it == column ? steps_[static_cast<size_t>(it - columns_.begin())]
-                                                                          : side_;
+    const auto it = std::lower_bound(columns_.begin(), columns_.end(), column);
+    return it != columns_.end() && *it == column ? steps_[static_cast<size_t>(it - columns_.begin())] : side_;
   }
 
   // The subtree of `height` with minimum corner `corner`; its columns are columns_[clo, chi), its
@@ -124,20 +153,23 @@ class FreeSpaceBuild {
   void Node(int height, std::array<uint32_t, 3> corner, size_t clo, size_t chi, size_t elo, size_t ehi) {
     const uint32_t size = uint32_t{1} << height;
     const uint64_t key = MortonEncode(corner[0] >> height, corner[1] >> height, corner[2] >> height);
-    uint32_t min_step = side_, max_step = 0;
-    for (size_t i = clo; i < chi; ++i) {
-      min_step = std::min(min_step, steps_[i]);
-      max_step = std::max(max_step, steps_[i]);
+    uint32_t min_step = side_, max_step = side_;  // columns no cube crosses never step
+    const Footprints& level = pyramid_[height];
+    const uint64_t prefix = Column(corner[0] >> height, corner[1] >> height);
+    const auto at = std::lower_bound(level.prefix.begin(), level.prefix.end(), prefix);
+    if (at != level.prefix.end() && *at == prefix) {
+      const size_t i = static_cast<size_t>(at - level.prefix.begin());
+      min_step = level.min[i];
+      if (level.count[i] == uint64_t{size} * size) max_step = level.max[i];
     }
-    if (chi - clo < uint64_t{size} * size) max_step = side_;  // columns no cube crosses
     if (elo == ehi && max_step <= corner[2]) return sink_.Uniform(height, key, true);
     if (elo == ehi && min_step >= corner[2] + size) return sink_.Uniform(height, key, false);
     if (height == 2) {
+      std::array<uint32_t, 16> step;  // by the column's 4 low bits (x<<1|y interleaved)
+      step.fill(side_);
+      for (size_t i = clo; i < chi; ++i) step[columns_[i] & 15] = steps_[i];
       uint64_t mask = 0;
-      for (uint32_t b = 0; b < 64; ++b) {
-        const auto [x, y, z] = MortonDecode(b);
-        mask |= uint64_t{corner[2] + z >= StepAt(corner[0] + x, corner[1] + y, clo, chi)} << b;
-      }
+      for (uint32_t b = 0; b < 64; ++b) mask |= uint64_t{corner[2] + kBrickZ[b] >= step[kBrickColumn[b]]} << b;
       for (size_t e = elo; e < ehi; ++e) {
         const uint64_t bit = uint64_t{1} << ((exceptions_[e] >> 1) & 63);
         mask = (exceptions_[e] & 1) ? mask | bit : mask & ~bit;
@@ -168,6 +200,11 @@ class FreeSpaceBuild {
   std::vector<uint64_t> columns_;  // sorted
   std::vector<uint32_t> steps_;    // per column: the first cell index (z') that is shadowed
   std::vector<uint64_t> exceptions_;
+  struct Footprints {
+    std::vector<uint64_t> prefix;  // sorted
+    std::vector<uint32_t> min, max, count;
+  };
+  std::vector<Footprints> pyramid_;
   uint64_t peak_bytes_ = 0;
 };
 
