@@ -7,7 +7,8 @@
 // voxel, so no cell holds two voxel centres: the cell holding a voxel's centre stores that voxel's
 // exact answer (voxel_shadows.h). Every other cell is undefined (shadow_dag_build.cc): inside a
 // voxel's cube it is inside geometry, and free space is never queried, as in Kämpe et al. 2015
-// where only surfaces look up their shadow. The build resolves undefined cells to whatever merges
+// where only surfaces look up their shadow (ShadowBuildOptions::define_free_space defines the air
+// too, at a cost measured in docs/benchmarks.md). The build resolves undefined cells to whatever merges
 // best: a subtree whose defined cells are all lit becomes all lit, all shadowed becomes all
 // shadowed, mixed ones follow ShadowBuildOptions::fill, and identical subtrees are merged with
 // hashes confirmed by comparison (Paper I's hashes, in one streaming bottom-up pass over the
