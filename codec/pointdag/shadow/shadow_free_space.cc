@@ -46,6 +46,16 @@ constexpr auto kBrickZ = [] {
   return t;
 }();
 
+// The part of sorted[lo, hi) whose keys (entry >> shift) lie in [from, to).
+std::pair<size_t, size_t> SubRange(const std::vector<uint64_t>& sorted, size_t lo, size_t hi, uint64_t from, uint64_t to,
+                                   int shift) {
+  const auto less = [shift](uint64_t entry, uint64_t key) { return (entry >> shift) < key; };
+  const auto begin = sorted.begin() + static_cast<long>(lo), end = sorted.begin() + static_cast<long>(hi);
+  const auto first = std::lower_bound(begin, end, from, less);
+  const auto last = std::lower_bound(first, end, to, less);
+  return {static_cast<size_t>(first - sorted.begin()), static_cast<size_t>(last - sorted.begin())};
+}
+
 struct Segment {
   uint64_t column;
   double in, out;  // along z', from the light cube's near face
@@ -182,14 +192,9 @@ class FreeSpaceBuild {
                                       corner[2] + (octant & 1) * half};
       const int below = height - 1;
       const uint64_t column = Column(c[0] >> below, c[1] >> below);
-      const auto cb = columns_.begin();
-      const size_t c0 = static_cast<size_t>(std::lower_bound(cb + static_cast<long>(clo), cb + static_cast<long>(chi), column << (2 * below)) - cb);
-      const size_t c1 = static_cast<size_t>(std::lower_bound(cb + static_cast<long>(c0), cb + static_cast<long>(chi), (column + 1) << (2 * below)) - cb);
+      const auto [c0, c1] = SubRange(columns_, clo, chi, column << (2 * below), (column + 1) << (2 * below), 0);
       const uint64_t cell = MortonEncode(c[0] >> below, c[1] >> below, c[2] >> below);
-      const auto by_code = [](uint64_t e, uint64_t code) { return (e >> 1) < code; };
-      const auto eb = exceptions_.begin();
-      const size_t e0 = static_cast<size_t>(std::lower_bound(eb + static_cast<long>(elo), eb + static_cast<long>(ehi), cell << (3 * below), by_code) - eb);
-      const size_t e1 = static_cast<size_t>(std::lower_bound(eb + static_cast<long>(e0), eb + static_cast<long>(ehi), (cell + 1) << (3 * below), by_code) - eb);
+      const auto [e0, e1] = SubRange(exceptions_, elo, ehi, cell << (3 * below), (cell + 1) << (3 * below), 1);
       Node(below, c, c0, c1, e0, e1);
     }
   }
