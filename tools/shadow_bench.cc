@@ -40,6 +40,8 @@ std::vector<int> Depths() {
   return {8, 10};
 }
 constexpr int kQueries = 1 << 21;
+// The free-space mode visits the shadow volumes' walls cell by cell: seconds at depth 10, much more beyond.
+constexpr int kFreeSpaceMaxDepth = 10;
 // A sun 45 degrees high in the south-west, travelling north-east and down.
 const Light kSun{{0.5, 0.5, -std::sqrt(0.5)}, false};
 
@@ -91,6 +93,20 @@ nlohmann::json ShadowCase(const std::filesystem::path& scan, int depth) {
   options.fill = UndefinedFill::kMatch;
   auto matched = BuildShadowDag(*dag, kSun, options);
   if (!unrelaxed.ok() || !collapsed.ok() || !matched.ok()) return {{"error", "a relaxation variant failed"}};
+  // Free space defined too (answers in the air), up to kFreeSpaceMaxDepth; its own peak RSS.
+  double free_bytes = -1, free_s = -1, free_rss = -1;
+  if (depth <= kFreeSpaceMaxDepth) {
+    options = ShadowBuildOptions{};
+    options.define_free_space = true;
+    malloc_trim(0);
+    std::ofstream("/proc/self/clear_refs") << "5";
+    const uint64_t free_baseline = RssAndPeak().first;
+    auto free_space = BuildShadowDag(*dag, kSun, options);
+    if (!free_space.ok()) return {{"error", free_space.status().ToString()}};
+    free_rss = static_cast<double>(RssAndPeak().second - free_baseline);
+    free_bytes = static_cast<double>(free_space->stats().shadow_dag_bytes);
+    free_s = free_space->stats().build_seconds;
+  }
 
   // Random surface voxels: their centres, one query each; every answer checked against `exact`.
   std::mt19937_64 rng(16);
@@ -118,6 +134,9 @@ nlohmann::json ShadowCase(const std::filesystem::path& scan, int depth) {
           {"dag_bytes", s.shadow_dag_bytes},
           {"collapse_only_bytes", collapsed->stats().shadow_dag_bytes},
           {"match_bytes", matched->stats().shadow_dag_bytes},
+          {"free_space_bytes", free_bytes},
+          {"free_space_s", free_s},
+          {"free_space_rss_bytes", free_rss},
           {"unrelaxed_bytes", unrelaxed->stats().shadow_dag_bytes},
           {"dense_bytes", s.dense_grid_bytes},
           {"map_bytes", s.shadow_map_bytes},
@@ -136,6 +155,15 @@ std::string Ratio(double whole, double dag) {
   std::snprintf(text, sizeof(text), "%.3g", whole / dag);
   return text;
 }
+
+std::string Seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3f", s);
+  return text;
+}
+
+// "–" for a figure not measured (negative).
+std::string Skipped(double value, const std::string& text) { return value < 0 ? "–" : text; }
 
 std::string Bytes(double b) {
   const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
@@ -170,8 +198,8 @@ int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out) {
       << " random voxel centres, one core, best of 3\n\n"
       << "| scan | depth | voxels | shadowed | light depth | DAG | no relax | collapse, lit | collapse, match | "
          "dense grid | shadow map | dense / DAG | map / DAG | DAG bits/voxel | exact s | build s | peak RSS | "
-         "own peak | Mq/s | wrong |\n"
-      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "own peak | Mq/s | wrong | free space | free s | free RSS |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   int failures = 0;
   for (const auto& scan : scans) {
     for (int depth : depths) {
@@ -185,7 +213,7 @@ int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out) {
       char row[768];
       std::snprintf(row, sizeof(row),
                     "| %s | %d | %.0f | %.0f | %d | %s | %s | %s | %s | %s | %s | %s | %s | %.2f | %.3f | %.3f | %s | "
-                    "%s | %.2f | %.0f |\n",
+                    "%s | %.2f | %.0f | %s | %s | %s |\n",
                     scan.filename().c_str(), depth, n("voxels"), n("shadowed"), r["light_depth"].get<int>(),
                     Bytes(n("dag_bytes")).c_str(), Bytes(n("unrelaxed_bytes")).c_str(),
                     Bytes(n("collapse_only_bytes")).c_str(), Bytes(n("match_bytes")).c_str(), Bytes(n("dense_bytes")).c_str(),
@@ -193,7 +221,9 @@ int RunShadowBench(const std::filesystem::path& data_dir, std::ostream& out) {
                     Ratio(n("map_bytes"), n("dag_bytes")).c_str(),
                     8 * n("dag_bytes") / n("voxels"), n("exact_s"), n("build_s"),
                     Bytes(n("rss_peak_over_baseline_bytes")).c_str(), Bytes(n("own_peak_bytes")).c_str(),
-                    n("queries_per_s") / 1e6, n("wrong_answers"));
+                    n("queries_per_s") / 1e6, n("wrong_answers"), Skipped(n("free_space_bytes"), Bytes(n("free_space_bytes"))).c_str(),
+                    Skipped(n("free_space_s"), Seconds(n("free_space_s"))).c_str(),
+                    Skipped(n("free_space_rss_bytes"), Bytes(n("free_space_rss_bytes"))).c_str());
       out << row << std::flush;
       failures += r["wrong_answers"].get<uint64_t>() != 0;
     }

@@ -1,7 +1,8 @@
 // `pointdag bench --shadow DIR` (issue #16): the light-space shadow DAG on every scan of DIR at two
 // resolutions (grid depth 8 and 10; POINTDAG_SHADOW_DEPTHS=8,10,12 chooses others), one sun-like
 // light: sizes against the dense grid and a plain shadow map, what each relaxation step of the
-// undefined cells gains, build time and memory, queries per second.
+// undefined cells gains, build time and memory, queries per second; the free-space mode's size, build
+// time and memory up to depth 10.
 #pragma once
 
 #include <filesystem>

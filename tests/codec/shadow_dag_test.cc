@@ -8,11 +8,13 @@
 #include <cstring>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "test_util.h"
 #include "pointdag/container/crc32c.h"
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/read/scan_reader.h"
+#include "pointdag/shadow/light_frame.h"
 #include "pointdag/shadow/voxel_shadows.h"
 #include "pointdag/voxelize/morton.h"
 #include "pointdag/voxelize/voxelizer.h"
@@ -129,6 +131,82 @@ TEST(ShadowDag, RefusesBadOptionsAndLights) {
   EXPECT_EQ(BuildShadowDag(dag, Light{{0, 0, 0}, false}, {}).status().code(), StatusCode::kInvalidArgument);
 }
 
+TEST(ShadowDag, LightDepthLimits) {
+  // Two voxels on a depth-19 grid: light depth 21, the deepest; its dense grid is 2^60 bytes, exactly.
+  const Svdag deep = DagOf({MortonEncode(5, 5, 5), MortonEncode(5, 5, 9)}, 19);
+  auto shadow = BuildShadowDag(deep, Towards(0, 0, -1));
+  ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
+  EXPECT_EQ(shadow->stats().light_depth, 21);
+  EXPECT_EQ(shadow->stats().dense_grid_bytes, uint64_t{1} << 60);
+  EXPECT_EQ(shadow->stats().shadow_map_bytes, uint64_t{4} << 42);
+  EXPECT_TRUE(shadow->Shadowed({5.5, 5.5, 5.5}));
+  EXPECT_FALSE(shadow->Shadowed({5.5, 5.5, 9.5}));
+  ASSERT_TRUE(ShadowDag::Deserialize(shadow->Serialize()).ok());
+  ShadowBuildOptions options;
+  options.extra_levels = 3;  // light depth 22: more than 63-bit codes hold
+  EXPECT_EQ(BuildShadowDag(deep, Towards(0, 0, -1), options).status().code(), StatusCode::kInvalidArgument);
+  options.extra_levels = 9;
+  EXPECT_EQ(BuildShadowDag(BoxOnPlane(), Towards(0, 0, -1), options).status().code(), StatusCode::kInvalidArgument);
+  // Finer light grids than needed answer the same.
+  const Svdag box = BoxOnPlane();
+  const Light light = Towards(0.7, -0.2, -1);
+  const auto exact = ShadowedVoxels(box, light).value();
+  for (int extra : {3, 5, 8}) {
+    options.extra_levels = extra;
+    auto fine = BuildShadowDag(box, light, options);
+    ASSERT_TRUE(fine.ok()) << fine.status().ToString();
+    EXPECT_EQ(fine->stats().light_depth, 4 + extra);
+    EXPECT_EQ(Mismatches(*fine, box, exact), 0u) << extra;
+  }
+}
+
+// With free space defined, a cell whose centre is outside every cube answers the definition's ray
+// test from that centre; voxel centres stay exact.
+TEST(ShadowDag, FreeSpaceAnswersTheAirToo) {
+  std::vector<std::pair<Svdag, Light>> cases = {{BoxOnPlane(), Towards(1, 0.3, -2)}, {BoxOnPlane(), Towards(0, 0, -1)},
+                                                {BoxOnPlane(), Towards(-0.4, 0.9, -0.5)}};
+  if (std::filesystem::exists(testing::DataDir() / "tiny_1.2-with-color_1065pts.las")) {
+    cases.emplace_back(ScanDag("pcl_milk_cartoon_clorox_kinect_rgb.ply", 5), Towards(0.3, 0.5, -0.8));
+  }
+  int shadowed_air = 0;
+  for (const auto& [dag, light] : cases) {
+    ShadowBuildOptions options;
+    options.define_free_space = true;
+    auto shadow = BuildShadowDag(dag, light, options);
+    ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
+    EXPECT_EQ(Mismatches(*shadow, dag, ShadowedVoxels(dag, light).value()), 0u);
+    const auto frame = LightFrame::Create(light.travel, dag.depth, dag.depth + 2).value();
+    std::vector<std::array<uint32_t, 3>> voxels;
+    dag.ForEachVoxel([&](uint64_t morton) { voxels.push_back(MortonDecode(morton)); });
+    std::mt19937 rng(3);
+    const double grid = std::ldexp(1.0, dag.depth);
+    std::uniform_real_distribution<double> across(0, grid), low(0, grid / 2);
+    int air = 0;
+    for (int i = 0; i < 3000; ++i) {
+      // The centre of the cell of a random point in the lower half of the grid, where shadows fall.
+      const auto cell = frame.Cell({across(rng), across(rng), low(rng)});
+      ASSERT_TRUE(cell.has_value());
+      const auto p = frame.GridPoint({((*cell)[0] + 0.5) * frame.cell_size(), ((*cell)[1] + 0.5) * frame.cell_size(),
+                                      ((*cell)[2] + 0.5) * frame.cell_size()});
+      const auto inside = [&](const std::array<uint32_t, 3>& k) {
+        return p[0] >= k[0] && p[0] <= k[0] + 1.0 && p[1] >= k[1] && p[1] <= k[1] + 1.0 && p[2] >= k[2] && p[2] <= k[2] + 1.0;
+      };
+      if (std::any_of(voxels.begin(), voxels.end(), inside)) continue;  // undefined
+      const bool expected = std::any_of(voxels.begin(), voxels.end(), [&](const auto& k) { return RayMeetsCell(p, light.travel, k); });
+      if (p[0] < 0 || p[1] < 0 || p[2] < 0 || p[0] > grid || p[1] > grid || p[2] > grid) continue;  // outside the grid
+      ++air;
+      shadowed_air += expected;
+      EXPECT_EQ(shadow->Shadowed(p), expected) << p[0] << "," << p[1] << "," << p[2];
+    }
+    EXPECT_GT(air, 1000);
+    // Surface-only is smaller: free space adds the shadow volumes' boundaries.
+    auto surface = BuildShadowDag(dag, light);
+    EXPECT_LT(surface->stats().shadow_dag_bytes, shadow->stats().shadow_dag_bytes);
+    EXPECT_TRUE(ShadowDag::Deserialize(shadow->Serialize()).ok());
+  }
+  EXPECT_GT(shadowed_air, 300);  // the air behind the box and the scan, not only lit air
+}
+
 // Every surface voxel of real scans at low resolution, several directions, each relaxation step
 // and a collision-prone hash: the DAG answers what ShadowedVoxels answers.
 TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
@@ -142,14 +220,16 @@ TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
       const auto exact = ShadowedVoxels(dag, light);
       ASSERT_TRUE(exact.ok()) << exact.status().ToString();
       std::vector<uint64_t> sizes;
-      for (const auto& [relax, fill] : {std::pair{false, UndefinedFill::kLit}, {true, UndefinedFill::kLit},
-                                        {true, UndefinedFill::kMajority}, {true, UndefinedFill::kMatch}}) {
+      for (const auto& [relax, fill, free_space] :
+           {std::tuple{false, UndefinedFill::kLit, false}, {true, UndefinedFill::kLit, false},
+            {true, UndefinedFill::kMajority, false}, {true, UndefinedFill::kMatch, false}, {true, UndefinedFill::kMajority, true}}) {
         ShadowBuildOptions options;
         options.relax_undefined = relax;
         options.fill = fill;
+        options.define_free_space = free_space;
         auto shadow = BuildShadowDag(dag, light, options);
         ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
-        EXPECT_EQ(Mismatches(*shadow, dag, *exact), 0u) << name << " relax " << relax << " fill " << int(fill);
+        EXPECT_EQ(Mismatches(*shadow, dag, *exact), 0u) << name << " relax " << relax << " fill " << int(fill) << " free " << free_space;
         EXPECT_EQ(shadow->stats().shadowed_voxels, static_cast<uint64_t>(std::count(exact->begin(), exact->end(), 1)));
         sizes.push_back(shadow->stats().shadow_dag_bytes);
 

@@ -49,4 +49,13 @@ std::optional<std::array<uint32_t, 3>> LightFrame::Cell(const std::array<double,
   return cell;
 }
 
+std::array<double, 3> LightFrame::GridPoint(const std::array<double, 3>& q) const {
+  const double half_grid = std::ldexp(0.5, depth_);
+  std::array<double, 3> p{half_grid, half_grid, half_grid};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) p[j] += axes_[i][j] * (q[i] - half_side_);
+  }
+  return p;
+}
+
 }  // namespace pointdag

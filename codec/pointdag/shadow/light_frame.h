@@ -29,7 +29,12 @@ class LightFrame {
   // (or for NaN). A point on the cube's far faces belongs to the last cell.
   std::optional<std::array<uint32_t, 3>> Cell(const std::array<double, 3>& grid_point) const;
 
+  // The grid point at light-space coordinates q (0 .. 2·half_side along x', y', z').
+  std::array<double, 3> GridPoint(const std::array<double, 3>& q) const;
+
   const std::array<double, 3>& travel() const { return travel_; }  // as given (z' is it normalized)
+  const std::array<std::array<double, 3>, 3>& axes() const { return axes_; }  // rows x', y', z'
+  double half_side() const { return half_side_; }
   int depth() const { return depth_; }
   int light_depth() const { return light_depth_; }
   double cell_size() const { return cell_; }  // in voxels

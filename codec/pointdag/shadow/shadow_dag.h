@@ -7,7 +7,8 @@
 // voxel, so no cell holds two voxel centres: the cell holding a voxel's centre stores that voxel's
 // exact answer (voxel_shadows.h). Every other cell is undefined (shadow_dag_build.cc): inside a
 // voxel's cube it is inside geometry, and free space is never queried, as in Kämpe et al. 2015
-// where only surfaces look up their shadow. The build resolves undefined cells to whatever merges
+// where only surfaces look up their shadow (ShadowBuildOptions::define_free_space defines the air
+// too, at a cost measured in docs/benchmarks.md). The build resolves undefined cells to whatever merges
 // best: a subtree whose defined cells are all lit becomes all lit, all shadowed becomes all
 // shadowed, mixed ones follow ShadowBuildOptions::fill, and identical subtrees are merged with
 // hashes confirmed by comparison (Paper I's hashes, in one streaming bottom-up pass over the
@@ -48,6 +49,11 @@ struct ShadowBuildOptions {
   int extra_levels = 2;        // light_depth = dag.depth + extra_levels, 2..8
   bool relax_undefined = true;  // false: undefined cells count as lit (for measuring the relaxation)
   UndefinedFill fill = UndefinedFill::kMajority;
+  // true: cells whose centre is outside every voxel cube are defined too, from a light-space depth map
+  // of the cubes (shadow_free_space.cc), so a point in the air is answered truly at its cell's centre;
+  // only cells inside cubes stay undefined. Larger and slower to build; relax_undefined and fill do
+  // not apply. false (default): only the voxel centres are defined, as only surfaces are queried.
+  bool define_free_space = false;
   // Bits of the subtree hash that are kept; tests narrow it to force collisions (answers must not change).
   uint64_t hash_mask = ~uint64_t{0};
 };

@@ -1,7 +1,8 @@
 // Which light-space cells are defined (shadow_dag.h): the cell holding each voxel's centre, with
 // that voxel's exact answer (voxel_shadows.h). Every other cell is undefined: cells inside a
 // voxel's cube that hold no centre are inside geometry, and free space is never queried either,
-// as in Kämpe et al. 2015, where only surfaces look up their shadow.
+// as in Kämpe et al. 2015, where only surfaces look up their shadow; unless define_free_space asks
+// for free space too (shadow_free_space.cc).
 #include <algorithm>
 #include <chrono>
 
@@ -37,7 +38,11 @@ StatusOr<ShadowDag> BuildShadowDag(const Svdag& dag, const Light& light, const S
   if (!inside || i != shadowed.size()) return Internal("voxel centres and exact shadows disagree on the voxels");
   std::sort(cells.begin(), cells.end());
   const uint64_t input_bytes = cells.capacity() * 8 + shadowed.capacity();
-  RETURN_IF_ERROR(BuildShadowArrays(cells, impl->frame.light_depth(), options, *impl));
+  if (options.define_free_space) {
+    RETURN_IF_ERROR(BuildFreeSpaceArrays(dag, cells, options, *impl));
+  } else {
+    RETURN_IF_ERROR(BuildShadowArrays(cells, impl->frame.light_depth(), options, *impl));
+  }
 
   impl->stats.surface_voxels = shadowed.size();
   impl->stats.shadowed_voxels = static_cast<uint64_t>(std::count(shadowed.begin(), shadowed.end(), 1));

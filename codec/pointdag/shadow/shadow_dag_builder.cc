@@ -26,6 +26,9 @@
 #include "pointdag/shadow/shadow_dag_impl.h"
 
 namespace pointdag {
+
+class ShadowTreeBuilder;
+
 namespace {
 
 constexpr uint32_t kUndefined = ~uint32_t{0};
@@ -58,9 +61,11 @@ struct Pending {
   std::array<uint32_t, 8> child{};
 };
 
-class Builder {
+}  // namespace
+
+class ShadowTreeBuilder {
  public:
-  Builder(int light_depth, const ShadowBuildOptions& options)
+  ShadowTreeBuilder(int light_depth, const ShadowBuildOptions& options)
       : depth_(light_depth), options_(options), tables_(light_depth + 1), pending_(light_depth + 1) {
     for (auto& p : pending_) p.child.fill(kUndefined);
   }
@@ -77,6 +82,21 @@ class Builder {
     value_ |= (cell & 1) << (code & 63);
     return Status::Ok();
   }
+
+  // A whole subtree of `height` (2: a brick) at cell `key`, in increasing Morton order, everything
+  // defined (the free-space mode of shadow_free_space.cc; not mixed with Add).
+  void AddUniform(int height, uint64_t key, bool shadowed) {
+    // Nodes still open below `height` come before this subtree and cannot contain it: done.
+    for (int below = 3; below <= height; ++below) {
+      if (pending_[below].active) Flush(below);
+    }
+    if (height == depth_) {
+      root_ = shadowed ? kShadowed : kLit;
+    } else {
+      Push(height, key, shadowed ? kShadowed : kLit);
+    }
+  }
+  void AddBrick(uint64_t key, uint64_t mask) { Push(2, key, ResolveBrick(~uint64_t{0}, mask)); }
 
   void Finish(ShadowDag::Impl& out) {
     if (started_) FlushBrick();
@@ -313,12 +333,20 @@ class Builder {
   uint32_t root_ = kUndefined;
 };
 
-}  // namespace
+ShadowSubtreeSink::ShadowSubtreeSink(int light_depth, const ShadowBuildOptions& options)
+    : builder_(std::make_unique<ShadowTreeBuilder>(light_depth, options)) {}
+ShadowSubtreeSink::~ShadowSubtreeSink() = default;
+void ShadowSubtreeSink::Uniform(int height, uint64_t key, bool shadowed) { builder_->AddUniform(height, key, shadowed); }
+void ShadowSubtreeSink::Brick(uint64_t key, uint64_t mask) { builder_->AddBrick(key, mask); }
+void ShadowSubtreeSink::Finish(ShadowDag::Impl& out) {
+  builder_->Finish(out);
+  out.FillSizeStats();
+}
 
 Status BuildShadowArrays(std::span<const uint64_t> defined_cells, int light_depth, const ShadowBuildOptions& options,
                          ShadowDag::Impl& out) {
   if (light_depth < 3 || light_depth > kMaxLightDepth) return InvalidArgument("light depth must be in 3..21");
-  Builder builder(light_depth, options);
+  ShadowTreeBuilder builder(light_depth, options);
   for (uint64_t cell : defined_cells) RETURN_IF_ERROR(builder.Add(cell));
   builder.Finish(out);
   out.FillSizeStats();

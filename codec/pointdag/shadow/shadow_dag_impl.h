@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -37,5 +38,26 @@ struct ShadowDag::Impl {
 // Fills everything but the frame, below_horizon, and the voxel counts of the stats.
 Status BuildShadowArrays(std::span<const uint64_t> defined_cells, int light_depth, const ShadowBuildOptions& options,
                          ShadowDag::Impl& out);
+
+class ShadowTreeBuilder;
+
+// The same build fed whole subtrees in increasing Morton order, each all lit, all shadowed or a
+// brick, with nothing undefined (the free-space mode, shadow_free_space.h).
+class ShadowSubtreeSink {
+ public:
+  ShadowSubtreeSink(int light_depth, const ShadowBuildOptions& options);
+  ~ShadowSubtreeSink();
+  void Uniform(int height, uint64_t key, bool shadowed);  // height 2 .. light_depth
+  void Brick(uint64_t key, uint64_t mask);                // mask bit = the cell's 6 low Morton bits
+  void Finish(ShadowDag::Impl& out);
+
+ private:
+  std::unique_ptr<ShadowTreeBuilder> builder_;
+};
+
+// The free-space mode (shadow_free_space.cc): arrays for out.frame where every cell outside the
+// voxel cubes is defined too; `centre_cells` as for BuildShadowArrays.
+Status BuildFreeSpaceArrays(const Svdag& dag, std::span<const uint64_t> centre_cells, const ShadowBuildOptions& options,
+                            ShadowDag::Impl& out);
 
 }  // namespace pointdag
