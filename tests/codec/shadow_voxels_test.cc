@@ -1,10 +1,7 @@
 // Exact per-voxel shadows (issue #16, voxel_shadows.h) against brute force and analytic shadows.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -365,56 +362,6 @@ TEST(LitSampleCounts, CountsUpTo65535LightsAndRefusesMore) {
   auto refused = LitSampleCounts(dag, lights);
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
-}
-
-// ---------------------------------------------------------------------------------------------
-// Speed (docs/benchmarks.md, "Exact voxel shadows"): POINTDAG_SHADOW_BENCH=1 to run.
-
-TEST(ShadowedVoxelsSpeed, ScansAtTheirBenchmarkVoxelSizes) {
-  if (!std::getenv("POINTDAG_SHADOW_BENCH")) GTEST_SKIP() << "timing only; set POINTDAG_SHADOW_BENCH=1";
-  SKIP_WITHOUT_DATA();
-  const testing::ScanAtVoxel scans[] = {
-      {"lion_takanawa_pdrf7_rgb.las", 0.01},   {"lion_takanawa_pdrf7_rgb.las", 0.005},
-      {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.002}, {"pcx_guanyin_cc-by-4.0_rgb.ply", 0.001},
-      {"autzen_trim_pdrf3_rgb.las", 4.0},       {"autzen_trim_pdrf3_rgb.las", 2.0},
-  };
-  // The sun at 35 degrees elevation in the south-east (azimuth 135): it travels north-west and down.
-  const Light sun = MakeLight(-0.579, 0.579, -0.574);
-  // Sun hours: 24 samples of a day's arc (elevation 10..80..10 degrees, azimuth 90..270).
-  std::vector<Light> day;
-  const double pi = std::acos(-1.0);
-  for (int i = 0; i < 24; ++i) {
-    const double f = (i + 0.5) / 24, azimuth = pi / 2 + f * pi, elevation = (10 + 70 * std::sin(f * pi)) * pi / 180;
-    day.push_back(MakeLight(-std::sin(azimuth) * std::cos(elevation), -std::cos(azimuth) * std::cos(elevation),
-                            -std::sin(elevation)));
-  }
-  std::printf("| scan | voxel | depth | voxels | shadowed | 1 thread s | voxels/s | 2 threads s | voxels/s | 24 samples, 2 threads s |\n");
-  for (const auto& scan : scans) {
-    auto reader = OpenScan(testing::DataDir() / scan.file);
-    ASSERT_TRUE(reader.ok()) << reader.status().ToString();
-    VoxelizeOptions options;
-    options.voxel_size = scan.voxel;
-    auto grid = Voxelize(**reader, options);
-    ASSERT_TRUE(grid.ok()) << grid.status().ToString();
-    const Svdag dag = DagOf(grid->morton, grid->depth);
-    double best[2] = {1e9, 1e9};
-    size_t shadowed = 0;
-    for (int threads : {1, 2}) {
-      for (int run = 0; run < 3; ++run) {
-        const auto start = std::chrono::steady_clock::now();
-        const auto result = Shadows(dag, sun, threads);
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        best[threads - 1] = std::min(best[threads - 1], s);
-        shadowed = static_cast<size_t>(std::count(result.begin(), result.end(), 1));
-      }
-    }
-    const auto start = std::chrono::steady_clock::now();
-    ASSERT_TRUE(LitSampleCounts(dag, day, 2).ok());
-    const double hours = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double n = static_cast<double>(grid->morton.size());
-    std::printf("| %s | %g | %d | %zu | %zu | %.3f | %.0f | %.3f | %.0f | %.2f |\n", scan.file, scan.voxel, grid->depth,
-                grid->morton.size(), shadowed, best[0], n / best[0], best[1], n / best[1], hours);
-  }
 }
 
 }  // namespace
