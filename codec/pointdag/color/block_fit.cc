@@ -146,6 +146,13 @@ uint64_t ErrorScalar(const Run& run, const Line& line, uint64_t stop) {
   return sse;
 }
 
+// The AVX2 copies are compiled for x86-64 only; elsewhere they are plain code that UseAvx2() never picks.
+#if defined(__x86_64__)
+#define POINTDAG_AVX2 __attribute__((target("avx2")))
+#else
+#define POINTDAG_AVX2
+#endif
+
 constexpr uint32_t kChunk = 8;  // a fixed count: GCC's -O2 vectorizes no loop that needs an epilogue
 static_assert(kChunk * 255 * 255 * 3072 < (uint64_t{1} << 32));  // a chunk's error fits 32 bits
 
@@ -154,7 +161,7 @@ struct ChunkSums {
   uint32_t sse;
   int32_t w, ww, wc[3];
 };
-__attribute__((target("avx2"), always_inline)) inline ChunkSums WeighChunk(const Run& run, uint32_t begin, uint32_t n, const Line& line, uint32_t* __restrict e) {
+POINTDAG_AVX2 __attribute__((always_inline)) inline ChunkSums WeighChunk(const Run& run, uint32_t begin, uint32_t n, const Line& line, uint32_t* __restrict e) {
   const int32_t* __restrict r = run.r + begin;
   const int32_t* __restrict g = run.g + begin;
   const int32_t* __restrict b = run.b + begin;
@@ -172,7 +179,7 @@ __attribute__((target("avx2"), always_inline)) inline ChunkSums WeighChunk(const
   return out;
 }
 
-__attribute__((target("avx2"))) Weighed WeighAvx2(const Run& run, const Line& line, uint64_t hopeless) {
+POINTDAG_AVX2 Weighed WeighAvx2(const Run& run, const Line& line, uint64_t hopeless) {
   Weighed out;
   uint32_t e[kChunk];
   for (uint32_t begin = 0; begin < run.length; begin += kChunk) {
@@ -187,7 +194,7 @@ __attribute__((target("avx2"))) Weighed WeighAvx2(const Run& run, const Line& li
   return out;
 }
 
-__attribute__((target("avx2"))) uint64_t ErrorAvx2(const Run& run, const Line& line, uint64_t stop) {
+POINTDAG_AVX2 uint64_t ErrorAvx2(const Run& run, const Line& line, uint64_t stop) {
   uint64_t sse = 0;
   uint32_t e[kChunk];
   for (uint32_t begin = 0; begin < run.length && sse <= stop; begin += kChunk) {
@@ -212,7 +219,7 @@ std::pair<int32_t, int32_t> ExtentScalar(const Run& run, const int32_t qa[3]) {
   return {lowest, highest};
 }
 
-__attribute__((target("avx2"))) std::pair<int32_t, int32_t> ExtentAvx2(const Run& run, const int32_t qa[3]) {
+POINTDAG_AVX2 std::pair<int32_t, int32_t> ExtentAvx2(const Run& run, const int32_t qa[3]) {
   int32_t lowest = INT32_MAX, highest = INT32_MIN;
   const int32_t* __restrict r = run.r;
   const int32_t* __restrict g = run.g;
@@ -264,8 +271,12 @@ BlockFit FitWeights(const Run& run, const int64_t sums[3], const Endpoints& ends
 }  // namespace
 
 bool BlockFitter::UseAvx2() {
+#if defined(__x86_64__)
   static const bool use = __builtin_cpu_supports("avx2") && std::getenv("POINTDAG_NO_AVX2") == nullptr;
   return use;
+#else
+  return false;
+#endif
 }
 
 BlockFitter::BlockFitter(std::span<const Rgb8> colors)
