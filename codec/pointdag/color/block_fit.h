@@ -52,10 +52,16 @@ class BlockFitter {
     int64_t ss[6];  // sum of rr, gg, bb, rg, rb, gb
   };
   Sums RangeSums(uint32_t begin, uint32_t end) const;
+  // Whether the per-color loops take their AVX2 copies: the CPU has AVX2 and POINTDAG_NO_AVX2 is unset
+  // (that forces the scalar loops, for tests and timings: both give the same integers).
+  static bool UseAvx2();
 
   std::span<const Rgb8> colors_;
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
-  std::vector<uint32_t> norms_;                   // c^T Q c per color (BlockError against black)
+  // Per color, padded with zeros so that the AVX2 loops may read whole chunks past the end:
+  std::vector<uint32_t> norms_;                 // c^T Q c (BlockError against black)
+  bool avx2_;
+  std::array<std::vector<int32_t>, 3> planes_;  // r, g, b; empty without AVX2
 };
 
 inline Rgb8 Interpolate(const Endpoints& e, uint32_t w, int bits) {
