@@ -166,6 +166,14 @@ std::string SubmitScan(client::Connection& c, const std::string& scan, const std
   return posted.ok() && posted->status == 202 ? posted->Header("location") : "";
 }
 
+std::string IngestScan(client::Connection& c, const std::string& scan, const std::string& query) {
+  const std::string location = SubmitScan(c, scan, query);
+  if (location.empty()) return "";
+  const nlohmann::json job = WaitForJob(c, location);
+  EXPECT_EQ(job["status"], "done") << job.dump();
+  return job["status"] == "done" ? "/v1/datasets/" + job["dataset_id"].get<std::string>() : "";
+}
+
 
 bool SuiteDaemon::Start() {
   if (!daemon_) {

@@ -113,5 +113,7 @@ nlohmann::json WaitForJob(client::Connection& c, const std::string& location);
 // Uploads `scan` (a file of ../shared/data) with the write token; returns the job's Location, or ""
 // with a test failure when the daemon does not take it with 202.
 std::string SubmitScan(client::Connection& c, const std::string& scan, const std::string& query);
+// SubmitScan, then waits for the job: the dataset's path (/v1/datasets/ID), or "" with a test failure.
+std::string IngestScan(client::Connection& c, const std::string& scan, const std::string& query);
 
 }  // namespace pointdag

@@ -91,12 +91,7 @@ class ShadowServer : public ::testing::Test {
   }
   static void TearDownTestSuite() { daemon_.Stop(); }
   static std::string Ingest(const std::string& scan, const std::string& query) {
-    auto c = daemon_->Connect();
-    const std::string location = SubmitScan(*c, scan, query);
-    if (location.empty()) return "";
-    const nlohmann::json job = WaitForJob(*c, location);
-    EXPECT_EQ(job["status"], "done") << job.dump();
-    return job["status"] == "done" ? "/v1/datasets/" + job["dataset_id"].get<std::string>() : "";
+    return IngestScan(*daemon_->Connect(), scan, query);
   }
   // Posts a shadows request and waits for its job; the job's last state.
   static nlohmann::json Shade(client::Connection& c, const std::string& dataset, const std::string& body) {

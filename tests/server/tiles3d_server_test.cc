@@ -44,12 +44,7 @@ class Tiles3dServer : public ::testing::Test {
   static void TearDownTestSuite() { daemon_.Stop(); }
   // Uploads a scan of ../shared/data and waits for its dataset; "" with a failure when it fails.
   static std::string Ingest(const std::string& scan, const std::string& query) {
-    auto c = daemon_->Connect();
-    const std::string location = SubmitScan(*c, scan, query);
-    if (location.empty()) return "";
-    const nlohmann::json job = WaitForJob(*c, location);
-    EXPECT_EQ(job["status"], "done") << job.dump();
-    return job["status"] == "done" ? "/v1/datasets/" + job["dataset_id"].get<std::string>() : "";
+    return IngestScan(*daemon_->Connect(), scan, query);
   }
   // Autzen at 0.5 m: three levels, georeferenced; ingested once for the suite.
   static const std::string& Autzen() {
