@@ -246,6 +246,21 @@ TEST(ShadowDag, RealScansAgreeWithTheExactShadowsEverywhere) {
   }
 }
 
+// Size regression (as zstd's): these bytes change only with a deliberate change of the build or its
+// relaxation; update them in the same commit and say why.
+TEST(ShadowDag, SizesOfAutzenAtDepth8AreKnown) {
+  SKIP_WITHOUT_DATA();
+  const Svdag dag = ScanDag("autzen_trim_pdrf3_rgb.las", 8);
+  const Light sun = Towards(0.5, 0.5, -std::sqrt(0.5));
+  ShadowBuildOptions unrelaxed;
+  unrelaxed.relax_undefined = false;
+  auto relaxed = BuildShadowDag(dag, sun), plain = BuildShadowDag(dag, sun, unrelaxed);
+  ASSERT_TRUE(relaxed.ok() && plain.ok());
+  EXPECT_EQ(relaxed->stats().shadowed_voxels, 14795u);
+  EXPECT_EQ(relaxed->stats().shadow_dag_bytes, 21004u);  // docs/benchmarks.md: 20.5 KiB
+  EXPECT_EQ(plain->stats().shadow_dag_bytes, 64212u);    // 62.7 KiB
+}
+
 TEST(ShadowDag, SerializedFormAnswersTheSame) {
   SKIP_WITHOUT_DATA();
   const Svdag dag = ScanDag("lion_takanawa_pdrf7_rgb.las", 7);
