@@ -10,6 +10,7 @@
 
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/pipeline.h"
+#include "pointdag/shadow/shadow_dag.h"
 #include "pointdag/shadow/shadow_layer.h"
 #include "pointdag/shadow/voxel_shadows.h"
 #include "pointdag/voxelize/morton.h"
@@ -21,13 +22,8 @@ namespace {
 
 double Now() { return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(); }
 
-struct FinestVoxels {
-  int depth = 0, tile_depth = 0, levels = 0;
-  std::vector<uint64_t> morton;            // sorted
-  std::map<TileKey, uint64_t> tile_voxels;  // every tile of every level
-};
+}  // namespace
 
-// The dataset's finest voxels, from its finest-level tiles' geometry (colors are not decoded).
 StatusOr<FinestVoxels> LoadFinestVoxels(Store& store, const std::string& dataset, const nlohmann::json& meta) {
   FinestVoxels out;
   const auto int_member = [&](const char* name, int low, int high) -> StatusOr<int> {
@@ -72,6 +68,8 @@ StatusOr<FinestVoxels> LoadFinestVoxels(Store& store, const std::string& dataset
   return out;
 }
 
+namespace {
+
 // Per voxel, how many of the plan's lights light it. Several lights go in about 20 groups, each
 // reported to `done(fraction)`, so that a long sun-hours job shows its progress.
 StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const ShadowPlan& plan, const std::function<void(double)>& done) {
@@ -92,6 +90,25 @@ StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const ShadowPlan& pl
   std::vector<uint16_t> lit(shadowed.size());
   std::transform(shadowed.begin(), shadowed.end(), lit.begin(), [](uint8_t s) { return static_cast<uint16_t>(s ? 0 : 1); });
   return lit;
+}
+
+// One light: its shadow DAG, serialized, and its figures in the summary; sun hours: none (nulls).
+StatusOr<std::vector<uint8_t>> ShadowDagOf(const Svdag& dag, const ShadowPlan& plan, nlohmann::json& summary) {
+  for (const char* key : {"shadow_dag_bytes", "shadow_dag_file_bytes", "dense_grid_bytes", "shadow_map_bytes",
+                          "light_depth", "build_seconds"}) {
+    summary[key] = nullptr;
+  }
+  if (plan.lights.size() != 1) return std::vector<uint8_t>{};
+  ASSIGN_OR_RETURN(const ShadowDag shadow, BuildShadowDag(dag, plan.lights.front()));
+  std::vector<uint8_t> bytes = shadow.Serialize();
+  const ShadowDagStats& stats = shadow.stats();
+  summary["shadow_dag_bytes"] = stats.shadow_dag_bytes;
+  summary["shadow_dag_file_bytes"] = bytes.size();
+  summary["dense_grid_bytes"] = stats.dense_grid_bytes;
+  summary["shadow_map_bytes"] = stats.shadow_map_bytes;
+  summary["light_depth"] = stats.light_depth;
+  summary["build_seconds"] = stats.build_seconds;
+  return bytes;
 }
 
 StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
@@ -133,6 +150,7 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   uint64_t dark = 0, lit_sum = 0;
   for (uint16_t c : lit) dark += c == 0, lit_sum += c;
   nlohmann::json summary = plan.description;
+  ASSIGN_OR_RETURN(const std::vector<uint8_t> shadow_dag, ShadowDagOf(dag, plan, summary));
   summary["surface_voxels"] = n;
   summary["shadowed_voxels"] = dark;  // with several samples: voxels no sample lights
   summary["mean_lit_fraction"] = static_cast<double>(lit_sum) / (static_cast<double>(n) * samples);
@@ -142,7 +160,7 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   summary["created"] = Now();
   summary["job"] = job.id;
   progress("store", 97, n);
-  RETURN_IF_ERROR(store.CommitShadows(job.id, dataset, summary, tiles));
+  RETURN_IF_ERROR(store.CommitShadows(job.id, dataset, summary, tiles, shadow_dag));
   return summary;
 }
 
