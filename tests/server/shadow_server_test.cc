@@ -517,6 +517,9 @@ TEST_F(ShadowServer, TheShadowDagIsServedAndQueriedExactly) {
     EXPECT_EQ(c->Request("GET", autzen + "/shadows/dag", {{"If-None-Match", bytes.Header("etag")}})->status, 304);
     const auto served = ShadowDag::Deserialize(Bytes(bytes.body));
     ASSERT_TRUE(served.ok()) << served.status().ToString();
+    const auto fetched = client::FetchShadowDag(*c, autzen);  // the C++ client reads the same bytes
+    ASSERT_TRUE(fetched.ok()) << fetched.status().ToString();
+    EXPECT_EQ(fetched->Serialize(), std::vector<uint8_t>(bytes.body.begin(), bytes.body.end()));
     EXPECT_EQ(summary["shadow_dag_bytes"].get<uint64_t>(), served->stats().shadow_dag_bytes);
     EXPECT_EQ(summary["shadow_dag_file_bytes"].get<uint64_t>(), bytes.body.size());
     EXPECT_EQ(summary["dense_grid_bytes"].get<uint64_t>(), served->stats().dense_grid_bytes);
@@ -594,6 +597,9 @@ TEST_F(ShadowServer, TheShadowDagIsServedAndQueriedExactly) {
     EXPECT_EQ(r.status, 404) << target;
     EXPECT_EQ(ErrorOf(r), none) << target;
   }
+  const auto no_dag = client::FetchShadowDag(*c, autzen);
+  EXPECT_FALSE(no_dag.ok());
+  EXPECT_NE(no_dag.status().message().find("answered 404"), std::string::npos) << no_dag.status().ToString();
   // Deleted.
   ASSERT_EQ(Shade(*c, autzen, R"({"time": "2026-06-21T13:00:00-07:00"})")["status"], "done");
   EXPECT_EQ(c->Request("GET", air)->status, 200);
