@@ -2,8 +2,9 @@
 // voxels from its stored finest-level tiles, the lights of the stored request (shadow_request.h),
 // the exact lit count of every voxel (voxel_shadows.h), every tile's layer (shadow_layer.h), for one
 // light (a direction or one sun time) the shadow DAG of the finest voxels (shadow_dag.h, what
-// GET .../shadows/dag and .../shadows/query answer from), and one commit of the whole set with the
-// job's done state (Store::CommitShadows). A sun-hours set has no shadow DAG: its answer is a count
+// GET .../shadows/dag and .../shadows/query answer from; exact at voxel centres, so the one light's
+// lit counts are read from it instead of casting every ray twice), and one commit of the whole set
+// with the job's done state (Store::CommitShadows). A sun-hours set has no shadow DAG: its answer is a count
 // per voxel, which one lit/shadowed DAG cannot hold, and no single sun of the span stands for it.
 //
 // Contract: returns "" once the set is committed, else the failure's reason (the dataset deleted
