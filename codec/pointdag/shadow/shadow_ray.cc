@@ -36,7 +36,6 @@ ShadowRayCaster::ShadowRayCaster(const Svdag& dag, const std::array<double, 3>& 
 }
 
 void ShadowRayCaster::Slabs(const std::array<uint32_t, 3>& lo, uint32_t half, ChildSlabs& slabs) const {
-  slabs.bias = bias_;
   for (int a = 0; a < 3; ++a) {
     const double low = static_cast<double>(lo[a]) - origin_[a];
     const double planes[4] = {low - kMargin, low + half - kMargin, low + half + kMargin, low + 2.0 * half + kMargin};

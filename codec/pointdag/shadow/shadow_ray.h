@@ -42,14 +42,16 @@ class ShadowRayCaster {
 
   // Entry and exit parameters of the ray, per axis and child bit, for the margin-grown halves of
   // a node at `lo` whose children have side `half`; a child is reached when its three intervals
-  // and t >= bias overlap.
+  // and t >= 0 overlap. Not t > bias: pruning by the bias too measured ~10 % slower at bias 0 (a
+  // member instead of a constant in the hottest test); RayMeetsCell() applies it to every voxel
+  // reached. A biased origin instead (the ray starting at c - bias * travel) was tried and dropped:
+  // its rounding decides grazed edges, so a larger bias could shadow more.
   struct ChildSlabs {
     double enter[3][2];
     double exit[3][2];
-    double bias;
     bool Reach(uint32_t octant) const {
       const uint32_t bx = (octant >> 2) & 1u, by = (octant >> 1) & 1u, bz = octant & 1u;
-      const double t0 = std::max(std::max(enter[0][bx], enter[1][by]), std::max(enter[2][bz], bias));
+      const double t0 = std::max(std::max(enter[0][bx], enter[1][by]), std::max(enter[2][bz], 0.0));
       const double t1 = std::min(std::min(exit[0][bx], exit[1][by]), exit[2][bz]);
       return t0 <= t1;
     }
