@@ -239,6 +239,14 @@ StatusOr<ShadowLayer> FetchShadowLayer(Connection& connection, const std::string
   return layer;
 }
 
+StatusOr<ShadowDag> FetchShadowDag(Connection& connection, const std::string& dataset_target) {
+  const std::string target = dataset_target + "/shadows/dag";
+  ASSIGN_OR_RETURN(const Response r, GetOk(connection, target));
+  auto dag = ShadowDag::Deserialize({reinterpret_cast<const uint8_t*>(r.body.data()), r.body.size()});
+  if (!dag.ok()) return Status(dag.status().code(), target + ": " + dag.status().message());
+  return dag;
+}
+
 StatusOr<FetchedLevel> FetchDataset(const std::string& dataset_url, std::optional<int> level,
                                     const std::function<void(size_t, size_t)>& progress, const FetchLimits& limits,
                                     bool shadows) {

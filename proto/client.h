@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pointdag/shadow/shadow_dag.h"
 #include "pointdag/shadow/shadow_layer.h"
 #include "pointdag/tile/tiler.h"
 #include "pointdag/voxelize/voxelizer.h"
@@ -105,6 +106,10 @@ struct FetchedLevel {
 // voxel count of the tile at that address (a layer of another size is refused).
 StatusOr<ShadowLayer> FetchShadowLayer(Connection& connection, const std::string& dataset_target, const TileAddress& tile,
                                        uint64_t tile_voxels);
+
+// GET {dataset_target}/shadows/dag (§3.2), read with ShadowDag::Deserialize (hostile bytes are a
+// typed Status); a 404 (no set, or a sun-hours set without a DAG) is kIoError naming it.
+StatusOr<ShadowDag> FetchShadowDag(Connection& connection, const std::string& dataset_target);
 
 // `dataset_url`: http://HOST:PORT/v1/datasets/{id}. Level: the finest when not given. `shadows`:
 // also each tile's shadow layer into `light` (kInvalidArgument when the dataset has no shadows).

@@ -5,6 +5,7 @@
 
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/json_text.h"
+#include "pointdag/shadow/shadow_dag.h"
 #include "pointdag/shadow/shadow_layer.h"
 #include "sqlite_util.h"
 #include "store.h"
@@ -103,6 +104,23 @@ Status CheckShadows(sqlite3* db, CheckReport& report) {
                     });
 }
 
+// Every stored shadow DAG matches its checksum and reads back (ShadowDag::Deserialize's checks).
+// Stores from before shadow DAGs were kept have no such table.
+Status CheckShadowDags(sqlite3* db, CheckReport& report) {
+  bool present = false;
+  RETURN_IF_ERROR(ForEachRow(db, "SELECT 1 FROM sqlite_master WHERE name = 'shadow_dags'", [&](const Statement&) { present = true; }));
+  if (!present) return Status::Ok();
+  return ForEachRow(db, "SELECT dataset_id, etag, bytes FROM shadow_dags", [&](const Statement& s) {
+    const std::string where = "the shadow DAG of dataset " + s.Text(0);
+    const std::vector<uint8_t> bytes = s.Blob(2);
+    if (TileEtag(bytes) != s.Text(1)) {
+      report.problems.push_back(where + ": its bytes do not match their checksum " + s.Text(1));
+    } else if (const auto dag = ShadowDag::Deserialize(bytes); !dag.ok()) {
+      report.problems.push_back(where + ": " + dag.status().ToString());
+    }
+  });
+}
+
 Status CheckJobs(sqlite3* db, const std::filesystem::path& upload_dir, CheckReport& report) {
   std::set<std::string> datasets;
   RETURN_IF_ERROR(ForEachRow(db, "SELECT id FROM datasets", [&](const Statement& s) { datasets.insert(s.Text(0)); }));
@@ -157,6 +175,7 @@ StatusOr<CheckReport> CheckDataDir(const std::filesystem::path& data_dir) {
   RETURN_IF_ERROR(CheckDatasets(c.db, report));
   RETURN_IF_ERROR(CheckTiles(c.db, report));
   RETURN_IF_ERROR(CheckShadows(c.db, report));
+  RETURN_IF_ERROR(CheckShadowDags(c.db, report));
   RETURN_IF_ERROR(CheckJobs(c.db, data_dir / "uploads", report));
   return report;
 }

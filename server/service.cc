@@ -290,6 +290,7 @@ HttpResponse Service::Route(const HttpRequest& request) {
         if (!*deleted) return FailAnswer(404, "no dataset " + id, route);
         cache_.EraseDataset(id);
         tiles3d_.EraseDataset(id);
+        shadows_.ForgetDataset(id);
         HttpResponse r;
         r.status = 204;
         r.route = route;
@@ -331,6 +332,13 @@ HttpResponse Service::Route(const HttpRequest& request) {
 
 HttpResponse Service::RouteShadows(const HttpRequest& request, const std::string& id, const std::vector<std::string>& parts) {
   const bool get = request.method == "GET" || request.method == "HEAD";
+  if (parts.size() == 5 && (parts[4] == "dag" || parts[4] == "query")) {
+    const std::string route = parts[4] == "dag" ? ShadowService::kDagRoute : ShadowService::kQueryRoute;
+    if (!get) return MethodNotAllowed(request, route, "GET");
+    if (auto denied = Deny(request, Scope::kRead, route)) return *denied;
+    if (parts[4] == "dag") return shadows_.GetDag(request, id);
+    return shadows_.Query(id, ParseQuery(QueryOf(request.target)));
+  }
   if (parts.size() > 4) {
     const std::string route = ShadowService::kTilesRoute;
     if (!get) return MethodNotAllowed(request, route, "GET");

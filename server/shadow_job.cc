@@ -10,6 +10,7 @@
 
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/pipeline.h"
+#include "pointdag/shadow/shadow_dag.h"
 #include "pointdag/shadow/shadow_layer.h"
 #include "pointdag/shadow/voxel_shadows.h"
 #include "pointdag/voxelize/morton.h"
@@ -21,13 +22,8 @@ namespace {
 
 double Now() { return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(); }
 
-struct FinestVoxels {
-  int depth = 0, tile_depth = 0, levels = 0;
-  std::vector<uint64_t> morton;            // sorted
-  std::map<TileKey, uint64_t> tile_voxels;  // every tile of every level
-};
+}  // namespace
 
-// The dataset's finest voxels, from its finest-level tiles' geometry (colors are not decoded).
 StatusOr<FinestVoxels> LoadFinestVoxels(Store& store, const std::string& dataset, const nlohmann::json& meta) {
   FinestVoxels out;
   const auto int_member = [&](const char* name, int low, int high) -> StatusOr<int> {
@@ -72,25 +68,50 @@ StatusOr<FinestVoxels> LoadFinestVoxels(Store& store, const std::string& dataset
   return out;
 }
 
-// Per voxel, how many of the plan's lights light it. Several lights go in about 20 groups, each
+namespace {
+
+// One light: its shadow DAG (the light's only ray pass: BuildShadowDag runs ShadowedVoxels for the
+// cells of the voxel centres, where the DAG is exact), its figures in the summary; sun hours: none
+// (their figures null).
+StatusOr<std::optional<ShadowDag>> ShadowDagOf(const Svdag& dag, const ShadowPlan& plan, nlohmann::json& summary) {
+  for (const char* key : {"shadow_dag_bytes", "shadow_dag_file_bytes", "dense_grid_bytes", "shadow_map_bytes",
+                          "light_depth", "build_seconds"}) {
+    summary[key] = nullptr;
+  }
+  if (plan.lights.size() != 1) return std::optional<ShadowDag>();
+  ASSIGN_OR_RETURN(ShadowDag shadow, BuildShadowDag(dag, plan.lights.front()));
+  const ShadowDagStats& stats = shadow.stats();
+  summary["shadow_dag_bytes"] = stats.shadow_dag_bytes;
+  summary["dense_grid_bytes"] = stats.dense_grid_bytes;
+  summary["shadow_map_bytes"] = stats.shadow_map_bytes;
+  summary["light_depth"] = stats.light_depth;
+  summary["build_seconds"] = stats.build_seconds;
+  return std::optional<ShadowDag>(std::move(shadow));
+}
+
+// Per voxel (`morton`, the DAG's voxels in order), how many of the plan's lights light it. One
+// light: read from its shadow DAG at each voxel's centre. Several go in about 20 groups, each
 // reported to `done(fraction)`, so that a long sun-hours job shows its progress.
-StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const ShadowPlan& plan, const std::function<void(double)>& done) {
-  if (plan.lights.size() > 1) {
-    const std::span<const Light> lights(plan.lights);
-    const size_t group = (lights.size() + 19) / 20;
-    std::vector<uint16_t> lit;
-    for (size_t first = 0; first < lights.size(); first += group) {
-      ASSIGN_OR_RETURN(const std::vector<uint16_t> part, LitSampleCounts(dag, lights.subspan(first, std::min(group, lights.size() - first))));
-      if (lit.empty()) lit.assign(part.size(), 0);
-      if (part.size() != lit.size()) return Internal("the shadow pass answered for different voxel counts");
-      for (size_t i = 0; i < lit.size(); ++i) lit[i] = static_cast<uint16_t>(lit[i] + part[i]);
-      done(static_cast<double>(first + group) / static_cast<double>(lights.size()));
+StatusOr<std::vector<uint16_t>> LitCounts(const Svdag& dag, const std::vector<uint64_t>& morton, const ShadowPlan& plan,
+                                          const std::optional<ShadowDag>& shadow, const std::function<void(double)>& done) {
+  if (shadow) {
+    std::vector<uint16_t> lit(morton.size());
+    for (size_t i = 0; i < morton.size(); ++i) {
+      const auto [x, y, z] = MortonDecode(morton[i]);
+      lit[i] = shadow->Shadowed({x + 0.5, y + 0.5, z + 0.5}) ? 0 : 1;
     }
     return lit;
   }
-  ASSIGN_OR_RETURN(const std::vector<uint8_t> shadowed, ShadowedVoxels(dag, plan.lights.front()));
-  std::vector<uint16_t> lit(shadowed.size());
-  std::transform(shadowed.begin(), shadowed.end(), lit.begin(), [](uint8_t s) { return static_cast<uint16_t>(s ? 0 : 1); });
+  const std::span<const Light> lights(plan.lights);
+  const size_t group = (lights.size() + 19) / 20;
+  std::vector<uint16_t> lit;
+  for (size_t first = 0; first < lights.size(); first += group) {
+    ASSIGN_OR_RETURN(const std::vector<uint16_t> part, LitSampleCounts(dag, lights.subspan(first, std::min(group, lights.size() - first))));
+    if (lit.empty()) lit.assign(part.size(), 0);
+    if (part.size() != lit.size()) return Internal("the shadow pass answered for different voxel counts");
+    for (size_t i = 0; i < lit.size(); ++i) lit[i] = static_cast<uint16_t>(lit[i] + part[i]);
+    done(static_cast<double>(first + group) / static_cast<double>(lights.size()));
+  }
   return lit;
 }
 
@@ -108,8 +129,11 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   const uint64_t n = finest.morton.size();
   progress("shadows", 20, n);
   ASSIGN_OR_RETURN(const Svdag dag, BuildDag(finest.morton, finest.depth));
+  nlohmann::json summary = plan.description;
+  ASSIGN_OR_RETURN(const std::optional<ShadowDag> shadow, ShadowDagOf(dag, plan, summary));
   ASSIGN_OR_RETURN(const std::vector<uint16_t> lit,
-                   LitCounts(dag, plan, [&](double fraction) { progress("shadows", 20 + 70 * std::min(fraction, 1.0), n); }));
+                   LitCounts(dag, finest.morton, plan, shadow,
+                             [&](double fraction) { progress("shadows", 20 + 70 * std::min(fraction, 1.0), n); }));
   if (lit.size() != n) return Internal("the shadow pass answered for " + std::to_string(lit.size()) + " of " + std::to_string(n) + " voxels");
   progress("layers", 90, n);
   const int samples = static_cast<int>(plan.lights.size());
@@ -132,7 +156,8 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   }
   uint64_t dark = 0, lit_sum = 0;
   for (uint16_t c : lit) dark += c == 0, lit_sum += c;
-  nlohmann::json summary = plan.description;
+  const std::vector<uint8_t> shadow_dag = shadow ? shadow->Serialize() : std::vector<uint8_t>{};
+  if (shadow) summary["shadow_dag_file_bytes"] = shadow_dag.size();
   summary["surface_voxels"] = n;
   summary["shadowed_voxels"] = dark;  // with several samples: voxels no sample lights
   summary["mean_lit_fraction"] = static_cast<double>(lit_sum) / (static_cast<double>(n) * samples);
@@ -142,7 +167,7 @@ StatusOr<nlohmann::json> ComputeAndCommit(Store& store, const JobRecord& job) {
   summary["created"] = Now();
   summary["job"] = job.id;
   progress("store", 97, n);
-  RETURN_IF_ERROR(store.CommitShadows(job.id, dataset, summary, tiles));
+  RETURN_IF_ERROR(store.CommitShadows(job.id, dataset, summary, tiles, shadow_dag));
   return summary;
 }
 

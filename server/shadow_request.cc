@@ -56,15 +56,8 @@ StatusOr<ShadowPlan> PlanDirection(const nlohmann::json& request) {
   return plan;
 }
 
-}  // namespace
-
-StatusOr<ShadowPlan> PlanShadows(const nlohmann::json& request, const nlohmann::json& dataset_meta) {
-  if (!request.is_object()) return InvalidArgument(std::string("the body must be a JSON object: ") + kForms);
-  for (const auto& [key, value] : request.items()) {
-    if (key != "direction" && key != "time" && key != "until" && key != "samples") {
-      return InvalidArgument("unknown member '" + key + "' (direction, time, until, samples)");
-    }
-  }
+// The lights of the body's direction, time, or sun-hours form (members already checked by name).
+StatusOr<ShadowPlan> PlanLights(const nlohmann::json& request, const nlohmann::json& dataset_meta) {
   if (request.contains("direction") == request.contains("time")) {
     return InvalidArgument(std::string("give either a direction or a time: ") + kForms);
   }
@@ -110,6 +103,30 @@ StatusOr<ShadowPlan> PlanShadows(const nlohmann::json& request, const nlohmann::
   plan.request = {{"time", request["time"]}, {"until", request["until"]}, {"samples", n}};
   plan.description = {{"kind", "sun_hours"}, {"samples", n}, {"time", FormatUtc(time)}, {"until", FormatUtc(until)},
                       {"hours", (until - time) / 3600}};
+  return plan;
+}
+
+}  // namespace
+
+StatusOr<ShadowPlan> PlanShadows(const nlohmann::json& request, const nlohmann::json& dataset_meta) {
+  if (!request.is_object()) return InvalidArgument(std::string("the body must be a JSON object: ") + kForms);
+  for (const auto& [key, value] : request.items()) {
+    if (key != "direction" && key != "time" && key != "until" && key != "samples" && key != "bias") {
+      return InvalidArgument("unknown member '" + key + "' (direction, time, until, samples, bias)");
+    }
+  }
+  double bias = 0;
+  if (request.contains("bias")) {
+    const nlohmann::json& b = request["bias"];
+    if (!b.is_number() || !CheckShadowBias(b.get<double>()).ok()) {
+      return InvalidArgument("bias must be a number of voxels from 0 to 16 (the self-shadow bias; 0 is the exact definition)");
+    }
+    bias = b.get<double>();
+  }
+  ASSIGN_OR_RETURN(ShadowPlan plan, PlanLights(request, dataset_meta));
+  for (Light& light : plan.lights) light.bias_voxels = bias;
+  if (request.contains("bias")) plan.request["bias"] = bias;
+  plan.description["bias"] = bias;
   return plan;
 }
 

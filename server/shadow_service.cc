@@ -6,6 +6,20 @@
 #include "shadow_request.h"
 
 namespace pointdag::server {
+namespace {
+
+// As a tile is answered, but a later POST replaces the set under the same URL: revalidated by its
+// ETag rather than kept for a year.
+HttpResponse RevalidatedAnswer(const HttpRequest& request, const StoredTile& body, const std::string& content_type,
+                               const std::string& route) {
+  HttpResponse r = ImmutableAnswer(request, body, content_type, route);
+  for (auto& [name, value] : r.headers) {
+    if (name == "Cache-Control") value = "no-cache";
+  }
+  return r;
+}
+
+}  // namespace
 
 HttpResponse ShadowService::Post(const HttpRequest& request, const std::string& dataset) {
   const auto meta = store_.GetDataset(dataset);
@@ -58,6 +72,7 @@ HttpResponse ShadowService::Get(const std::string& dataset) {
 HttpResponse ShadowService::Delete(const std::string& dataset) {
   const auto deleted = store_.DeleteShadows(dataset);
   if (!deleted.ok()) return StoreFailureAnswer(deleted.status(), kRoute);
+  queries_.Erase(dataset);
   if (!*deleted) return NoShadows(dataset, kRoute);
   HttpResponse r;
   r.status = 204;
@@ -76,12 +91,35 @@ HttpResponse ShadowService::GetLayer(const HttpRequest& request, const std::stri
     return FailAnswer(404, "no tile " + address + " in this dataset", kTilesRoute);
   }
   if (auto corrupt = RefuseCorruptTile(**stored, dataset, "shadows/tiles/" + address, metrics_, kTilesRoute)) return *corrupt;
-  HttpResponse r = ImmutableAnswer(request, **stored, "application/vnd.pointdag.shadow", kTilesRoute);
-  // Replaced by a later POST: revalidated by its ETag rather than kept for a year.
-  for (auto& [name, value] : r.headers) {
-    if (name == "Cache-Control") value = "no-cache";
+  return RevalidatedAnswer(request, **stored, "application/vnd.pointdag.shadow", kTilesRoute);
+}
+
+HttpResponse ShadowService::NoShadowDag(const std::string& dataset, const std::string& route) {
+  const auto summary = store_.GetShadows(dataset);
+  if (!summary.ok()) return StoreFailureAnswer(summary.status(), route);
+  if (!*summary) return NoShadows(dataset, route);
+  return FailAnswer(404, "the shadow set of dataset " + dataset + " has no shadow DAG (sun hours have none; "
+                         "POST a direction or a time for one)", route);
+}
+
+HttpResponse ShadowService::GetDag(const HttpRequest& request, const std::string& dataset) {
+  const auto stored = store_.GetShadowDag(dataset);
+  if (!stored.ok()) return StoreFailureAnswer(stored.status(), kDagRoute);
+  if (!*stored) return NoShadowDag(dataset, kDagRoute);
+  if (auto corrupt = RefuseCorruptTile(**stored, dataset, "shadows/dag", metrics_, kDagRoute)) return *corrupt;
+  return RevalidatedAnswer(request, **stored, "application/vnd.pointdag.shadow-dag", kDagRoute);
+}
+
+HttpResponse ShadowService::Query(const std::string& dataset, const std::map<std::string, std::string>& query) {
+  const auto shadows = queries_.Get(dataset);
+  if (!shadows.ok()) {
+    if (shadows.status().code() == StatusCode::kCorrupt) return FailAnswer(500, shadows.status().message(), kQueryRoute);
+    return StoreFailureAnswer(shadows.status(), kQueryRoute);
   }
-  return r;
+  if (!*shadows) return NoShadowDag(dataset, kQueryRoute);
+  const auto answer = AnswerShadowQuery(**shadows, query);
+  if (!answer.ok()) return FailAnswer(400, answer.status().message(), kQueryRoute);
+  return JsonAnswer(200, *answer, kQueryRoute);
 }
 
 }  // namespace pointdag::server

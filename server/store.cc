@@ -35,6 +35,9 @@ CREATE TABLE IF NOT EXISTS shadow_tiles (
   level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, z INTEGER NOT NULL,
   voxels INTEGER NOT NULL, etag TEXT NOT NULL, bytes BLOB NOT NULL,
   PRIMARY KEY (dataset_id, level, x, y, z));
+CREATE TABLE IF NOT EXISTS shadow_dags (
+  dataset_id TEXT PRIMARY KEY REFERENCES shadow_sets(dataset_id) ON DELETE CASCADE,
+  etag TEXT NOT NULL, bytes BLOB NOT NULL);
 )sql";
 
 // Stores written before jobs.attempts existed get the column (their jobs count as never started);

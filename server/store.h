@@ -67,7 +67,8 @@ class Store {
   // How long a statement waits for another process's lock before kResourceLimit: short, so an
   // HTTP request answers 503 instead of hanging.
   static constexpr int kBusyTimeoutMs = 2000;
-  // Creates the file and schema, or migrates an older store (adds jobs.attempts).
+  // Creates the file and schema, or migrates an older store (adds jobs.attempts, jobs.kind and the
+  // shadow tables; an older shadow set simply has no shadow DAG).
   static StatusOr<std::unique_ptr<Store>> Open(const std::filesystem::path& file, int busy_timeout_ms = kBusyTimeoutMs);
   ~Store();
 
@@ -105,12 +106,17 @@ class Store {
   // Creates a shadows job unless one for the same dataset is queued or running: then nothing is
   // created and that job's id is returned (one check and insert in one transaction).
   StatusOr<std::optional<std::string>> CreateShadowJob(const JobRecord& job);
-  // One transaction: the dataset's shadow set (if any) goes, the new summary and every layer come,
-  // and the job is done. kInvalidArgument when the dataset is gone (deleted meanwhile).
+  // One transaction: the dataset's shadow set (if any) goes, the new summary, every layer and the
+  // serialized shadow DAG (proto/SHADOW_FORMAT.md §1; empty: the set has none) come, and the job is
+  // done. kInvalidArgument when the dataset is gone (deleted meanwhile).
   Status CommitShadows(const std::string& job_id, const std::string& dataset_id, const nlohmann::json& summary,
-                       const std::vector<ShadowTile>& layers);
+                       const std::vector<ShadowTile>& layers, const std::vector<uint8_t>& shadow_dag);
   StatusOr<std::optional<nlohmann::json>> GetShadows(const std::string& dataset_id);
   StatusOr<std::optional<StoredTile>> GetShadowTile(const std::string& dataset_id, const TileKey& key);
+  // The set's shadow DAG, or nullopt (no set, a sun-hours set, or one stored before DAGs were kept);
+  // the etag alone is a cheap way to see whether a cached copy is still the current one.
+  StatusOr<std::optional<StoredTile>> GetShadowDag(const std::string& dataset_id);
+  StatusOr<std::optional<std::string>> GetShadowDagEtag(const std::string& dataset_id);
   // False: the dataset has no shadow set.
   StatusOr<bool> DeleteShadows(const std::string& dataset_id);
 

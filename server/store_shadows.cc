@@ -47,7 +47,7 @@ StatusOr<std::optional<std::string>> Store::CreateShadowJob(const JobRecord& job
 }
 
 Status Store::CommitShadows(const std::string& job_id, const std::string& dataset_id, const nlohmann::json& summary,
-                            const std::vector<ShadowTile>& layers) {
+                            const std::vector<ShadowTile>& layers, const std::vector<uint8_t>& shadow_dag) {
   std::lock_guard lock(write_mutex_);
   return InTransaction(writer_, [&]() -> Status {
     Statement dataset(writer_, "SELECT 1 FROM datasets WHERE id=?");
@@ -63,6 +63,11 @@ Status Store::CommitShadows(const std::string& job_id, const std::string& datase
     for (const ShadowTile& t : layers) {
       insert.Reset();
       RETURN_IF_ERROR(insert.Bind(dataset_id, t.key.level, t.key.x, t.key.y, t.key.z, t.voxels, TileEtag(t.bytes), t.bytes).Run());
+    }
+    if (!shadow_dag.empty()) {
+      RETURN_IF_ERROR(Statement(writer_, "INSERT INTO shadow_dags VALUES (?,?,?)")
+                          .Bind(dataset_id, TileEtag(shadow_dag), shadow_dag)
+                          .Run());
     }
     return Statement(writer_, "UPDATE jobs SET state='done', stage='done', percent=100, updated=? WHERE id=?")
         .Bind(now, job_id)
@@ -85,6 +90,20 @@ StatusOr<std::optional<StoredTile>> Store::GetShadowTile(const std::string& data
   Statement s(reader_, "SELECT etag, bytes FROM shadow_tiles WHERE dataset_id=? AND level=? AND x=? AND y=? AND z=?");
   ASSIGN_OR_RETURN(const bool found, s.Bind(dataset_id, key.level, key.x, key.y, key.z).Next());
   return found ? std::optional<StoredTile>(StoredTile{s.Text(0), s.Blob(1)}) : std::optional<StoredTile>();
+}
+
+StatusOr<std::optional<StoredTile>> Store::GetShadowDag(const std::string& dataset_id) {
+  std::lock_guard lock(read_mutex_);
+  Statement s(reader_, "SELECT etag, bytes FROM shadow_dags WHERE dataset_id=?");
+  ASSIGN_OR_RETURN(const bool found, s.Bind(dataset_id).Next());
+  return found ? std::optional<StoredTile>(StoredTile{s.Text(0), s.Blob(1)}) : std::optional<StoredTile>();
+}
+
+StatusOr<std::optional<std::string>> Store::GetShadowDagEtag(const std::string& dataset_id) {
+  std::lock_guard lock(read_mutex_);
+  Statement s(reader_, "SELECT etag FROM shadow_dags WHERE dataset_id=?");
+  ASSIGN_OR_RETURN(const bool found, s.Bind(dataset_id).Next());
+  return found ? std::optional<std::string>(s.Text(0)) : std::optional<std::string>();
 }
 
 StatusOr<bool> Store::DeleteShadows(const std::string& dataset_id) {

@@ -2,7 +2,7 @@
 // shadow, built as a shadow DAG (issue #16); sun hours over a span of time from N samples.
 //
 //   pointdag shadow IN (--direction X,Y,Z | --time ISO8601 [--until ISO8601 --samples N])
-//                      (--voxel S | --depth D) [--json] [-o OUT.ply | -o OUT.pdsh]
+//                      (--voxel S | --depth D) [--bias VOXELS] [--json] [-o OUT.ply | -o OUT.pdsh]
 //
 // Exit codes as the rest of the CLI: 0 ok, 1 bad input (message on stderr), 2 usage.
 #pragma once
@@ -20,6 +20,7 @@ struct ShadowCommand {
   std::optional<int> samples;
   std::optional<double> voxel;
   std::optional<int> depth;
+  double bias = 0;  // Light::bias_voxels of every light
   bool json = false;
 };
 

@@ -216,5 +216,49 @@ TEST(ShadowCli, BenchShadowRunsOnAFolder) {
   EXPECT_EQ(Cli("bench --shadow " + (dir / "empty").string(), dir).exit_code, 1);
 }
 
+// --bias VOXELS reaches every light (one direction, and each sun of sun hours), is echoed, and is
+// checked before the load; without it the answers are the definition (bias 0).
+TEST(ShadowCli, BiasReachesTheLightsAndIsChecked) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const Svdag dag = VoxelizeLikeTheCli(kGeoScan, 7);
+  auto light = LightFromDirection(1, 0.5, -0.6);  // about 28 degrees high: flat ground shadows itself
+  ASSERT_TRUE(light.ok());
+  std::vector<uint64_t> counts;
+  for (double bias : {0.0, 1.5, 3.0}) {  // ground lit from 0.5 / sin 28.2 = 1.06 on
+    const std::string flag = bias == 0 ? "" : " --bias " + std::to_string(bias);
+    const nlohmann::json r = RunJson(Scan(kGeoScan) + " --depth 7 --direction 1,0.5,-0.6" + flag, dir);
+    Light biased = *light;
+    biased.bias_voxels = bias;
+    auto shadowed = ShadowedVoxels(dag, biased);
+    ASSERT_TRUE(shadowed.ok()) << shadowed.status().ToString();
+    EXPECT_EQ(r["bias"].get<double>(), bias);
+    EXPECT_EQ(r["shadowed_voxels"].get<uint64_t>(), Sum(*shadowed)) << bias;
+    counts.push_back(r["shadowed_voxels"].get<uint64_t>());
+  }
+  EXPECT_GT(counts[0], counts[1]);
+  EXPECT_GE(counts[1], counts[2]);
+  // Sun hours: every sample carries the bias.
+  const std::string span = " --time 2026-06-21T05:00:00-07:00 --until 2026-06-21T21:00:00-07:00 --samples 5";
+  const nlohmann::json hours = RunJson(Scan(kGeoScan) + " --depth 7 --bias 2" + span, dir);
+  const auto& sun = hours["light"]["sun"];
+  auto lights = SunLights(*ParseUtcTime("2026-06-21T12:00:00Z"), *ParseUtcTime("2026-06-22T04:00:00Z"), 5,
+                          sun["latitude_deg"], sun["longitude_deg"]);
+  ASSERT_TRUE(lights.ok());
+  for (Light& l : *lights) l.bias_voxels = 2;
+  auto lit = LitSampleCounts(dag, *lights);
+  ASSERT_TRUE(lit.ok()) << lit.status().ToString();
+  EXPECT_EQ(hours["sun_hours"]["never_lit"].get<uint64_t>(), static_cast<uint64_t>(std::count(lit->begin(), lit->end(), 0)));
+  EXPECT_NEAR(hours["sun_hours"]["mean_hours"].get<double>(),
+              std::accumulate(lit->begin(), lit->end(), 0.0) / static_cast<double>(lit->size()) * 16.0 / 5.0, 1e-9);
+  // Out of range or not a number: bad input, named, before the scan is read.
+  for (const char* bias : {"-1", "16.5", "nan", "inf"}) {
+    const CliRun run = Cli("shadow " + Scan(kGeoScan) + " --depth 7 --direction 0,0,-1 --bias " + bias, dir);
+    EXPECT_EQ(run.exit_code, 1) << bias << ": " << run.err;
+    EXPECT_NE(run.err.find("--bias"), std::string::npos) << bias << ": " << run.err;
+  }
+  EXPECT_EQ(Cli("shadow " + Scan(kGeoScan) + " --depth 7 --direction 0,0,-1 --bias one", dir).exit_code, 2);
+}
+
 }  // namespace
 }  // namespace pointdag

@@ -15,6 +15,7 @@
 
 #include "client.h"
 #include "daemon_util.h"
+#include "shadow_test_util.h"
 #include "pointdag/dag/dag_builder.h"
 #include "pointdag/shadow/shadow_layer.h"
 #include "pointdag/shadow/solar_position.h"
@@ -28,18 +29,6 @@ namespace {
 
 using client::Response;
 
-std::span<const uint8_t> Bytes(const std::string& s) { return {reinterpret_cast<const uint8_t*>(s.data()), s.size()}; }
-
-Response Post(client::Connection& c, const std::string& target, const std::string& body, bool auth = true) {
-  auto headers = auth ? kAuth : std::map<std::string, std::string>{};
-  headers["Content-Type"] = "application/json";
-  return *c.Request("POST", target, headers, body);
-}
-
-std::string ErrorOf(const Response& r) {
-  const nlohmann::json j = Json(r);
-  return j.is_object() && j.contains("error") && j["error"].is_string() ? j["error"].get<std::string>() : "(no error member) " + r.body;
-}
 
 // Every tile of a dataset with its voxel count: the hierarchy from the root, all levels.
 std::map<TileKey, uint64_t> AllTiles(client::Connection& c, const std::string& dataset, int levels) {
@@ -90,17 +79,7 @@ class ShadowServer : public ::testing::Test {
     ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start";
   }
   static void TearDownTestSuite() { daemon_.Stop(); }
-  static std::string Ingest(const std::string& scan, const std::string& query) {
-    return IngestScan(*daemon_->Connect(), scan, query);
-  }
-  // Posts a shadows request and waits for its job; the job's last state.
-  static nlohmann::json Shade(client::Connection& c, const std::string& dataset, const std::string& body) {
-    const Response r = Post(c, dataset + "/shadows", body);
-    EXPECT_EQ(r.status, 202) << r.body;
-    if (r.status != 202) return {};
-    EXPECT_EQ(Json(r)["kind"], "shadows");
-    return WaitForJob(c, r.Header("location"));
-  }
+  static std::string Ingest(const std::string& scan, const std::string& query) { return IngestScan(*daemon_->Connect(), scan, query); }
   static inline SuiteDaemon daemon_{"pointdagd-shadow-test"};
 };
 
@@ -148,7 +127,7 @@ TEST_F(ShadowServer, EveryRouteAnswersItsStatusAndMessage) {
       {R"({"direction": "down"})", "direction must be three numbers [x, y, z]"},
       {R"({"direction": [0, 0, 0]})", "direction: "},
       {R"({"direction": [0, 0, -1], "samples": 4})", "until and samples go with a time, not with a direction"},
-      {R"({"direction": [0, 0, -1], "colour": 1})", "unknown member 'colour' (direction, time, until, samples)"},
+      {R"({"direction": [0, 0, -1], "colour": 1})", "unknown member 'colour' (direction, time, until, samples, bias)"},
       {R"({"time": "2026-06-21T12:00:00Z"})", "the dataset is not georeferenced"},
   };
   for (const auto& [body, message] : refused) {
@@ -475,14 +454,7 @@ TEST(ShadowCheck, ReportsAMissingAndADamagedLayer) {
     ASSERT_EQ(WaitForJob(*c, posted.Header("location"))["status"], "done");
   }
   daemon.Stop(SIGTERM);
-  const auto check = [&] {
-    std::string out;
-    FILE* pipe = popen((std::string(POINTDAGD) + " --data-dir " + daemon.var().string() + " --check 2>&1").c_str(), "r");
-    char buffer[4096];
-    for (size_t n; pipe && (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;) out.append(buffer, n);
-    const int status = pipe ? pclose(pipe) : -1;
-    return std::pair{WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-  };
+  const auto check = [&] { return RunCheck(daemon.var()); };
   EXPECT_EQ(check().first, 0) << check().second;
   ASSERT_TRUE(testing::ExecSql(daemon.store(), "DELETE FROM shadow_tiles WHERE level = 1 AND rowid = (SELECT MIN(rowid) FROM shadow_tiles WHERE level = 1)"));
   ASSERT_TRUE(testing::ExecSql(daemon.store(), "UPDATE shadow_tiles SET bytes = zeroblob(20) WHERE level = 0"));

@@ -2,8 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace pointdag {
+
+Status CheckShadowBias(double bias) {
+  if (!std::isfinite(bias) || bias < 0 || bias > kMaxShadowBias) {
+    return InvalidArgument("shadow bias must be a number of voxels from 0 to 16");
+  }
+  return Status::Ok();
+}
 
 StatusOr<Light> LightFromDirection(double x, double y, double z) {
   if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {

@@ -26,8 +26,8 @@ std::array<uint32_t, 3> ChildCorner(const std::array<uint32_t, 3>& lo, uint32_t 
 
 }  // namespace
 
-ShadowRayCaster::ShadowRayCaster(const Svdag& dag, const std::array<double, 3>& travel)
-    : dag_(dag), travel_(travel) {
+ShadowRayCaster::ShadowRayCaster(const Svdag& dag, const std::array<double, 3>& travel, double bias)
+    : dag_(dag), travel_(travel), bias_(bias) {
   for (int a = 0; a < 3; ++a) {
     flat_[a] = travel[a] == 0;
     inv_[a] = flat_[a] ? 0 : -1 / travel[a];
@@ -67,7 +67,7 @@ bool ShadowRayCaster::BrickBlocks(uint64_t brick, const std::array<uint32_t, 3>&
       const uint32_t v = j ^ flip_;
       if (!((cell >> v) & 1u) || !voxels.Reach(v)) continue;
       const auto voxel = ChildCorner(cell_lo, v, 1);
-      if (voxel != self_ && RayMeetsCell(origin_, travel_, voxel)) return true;
+      if (voxel != self_ && RayMeetsCell(origin_, travel_, voxel, bias_)) return true;
     }
   }
   return false;

@@ -18,6 +18,7 @@ constexpr size_t kMaxLights = 65535;  // counts are 16-bit
 constexpr size_t kBlock = 512;        // voxels a worker takes at a time (Morton neighbours share bricks)
 
 Status CheckLight(const Light& light) {
+  RETURN_IF_ERROR(CheckShadowBias(light.bias_voxels));
   if (light.below_horizon) return Status::Ok();
   const auto& t = light.travel;
   if (!std::isfinite(t[0]) || !std::isfinite(t[1]) || !std::isfinite(t[2])) {
@@ -45,7 +46,7 @@ void CastAll(const Svdag& dag, const Light& light, const std::vector<uint64_t>& 
              std::vector<uint8_t>& shadowed) {
   std::atomic<size_t> next{0};
   auto work = [&] {
-    ShadowRayCaster caster(dag, light.travel);
+    ShadowRayCaster caster(dag, light.travel, light.bias_voxels);
     for (size_t begin; (begin = next.fetch_add(kBlock)) < codes.size();) {
       const size_t end = std::min(codes.size(), begin + kBlock);
       for (size_t i = begin; i < end; ++i) shadowed[i] = caster.Blocked(MortonDecode(codes[i])) ? 1 : 0;
@@ -67,7 +68,7 @@ void CastAll(const Svdag& dag, const Light& light, const std::vector<uint64_t>& 
 }  // namespace
 
 bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 3>& travel,
-                  const std::array<uint32_t, 3>& cell) {
+                  const std::array<uint32_t, 3>& cell, double bias) {
   // Slab test on the closed cube; an axis the ray keeps must already lie within the slab.
   double t_lo = -std::numeric_limits<double>::infinity();
   double t_hi = std::numeric_limits<double>::infinity();
@@ -83,7 +84,7 @@ bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 
     t_lo = std::max(t_lo, ta);
     t_hi = std::min(t_hi, tb);
   }
-  return t_lo <= t_hi && t_hi > 0;
+  return t_lo <= t_hi && t_hi > bias;
 }
 
 StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads) {

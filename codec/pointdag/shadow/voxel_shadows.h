@@ -3,7 +3,8 @@
 // Definition (the one every test and every other path must reproduce bit for bit): in grid units,
 // voxel k is the closed cube [k, k + 1]^3 and its centre is k + 0.5. Voxel v is in shadow when the
 // half-line from its centre towards the light, { c_v - t * travel : t > 0 }, meets the closed cube of
-// another occupied voxel (its own cube excluded). RayMeetsCell() is that predicate; fast paths may
+// another occupied voxel (its own cube excluded). With a self-shadow bias b = light.bias_voxels
+// (light.h; 0 = the definition above), only the part t > b counts. RayMeetsCell() is that predicate; fast paths may
 // find candidate cells any way they like (DAG traversal, DDA, with a safety margin) but decide
 // with RayMeetsCell() so that ties (a ray grazing an edge) come out the same everywhere.
 // A light below the horizon: every voxel is in shadow.
@@ -24,13 +25,14 @@
 namespace pointdag {
 
 // Does the half-line from `origin` (grid units) going against `travel` meet the closed cube of
-// `cell`? The shared tie-breaking predicate of the definition above.
+// `cell` at some t > `bias` (`travel` unit length, so t is a distance)? The shared tie-breaking
+// predicate of the definition above.
 bool RayMeetsCell(const std::array<double, 3>& origin, const std::array<double, 3>& travel,
-                  const std::array<uint32_t, 3>& cell);
+                  const std::array<uint32_t, 3>& cell, double bias = 0);
 
 // One byte per voxel, 1 = shadowed, 0 = lit, in Morton order. `dag` is well formed (built here,
-// or decoded and Validate()d). kInvalidArgument for a depth outside 2..21 or a light whose travel
-// is NaN, infinite or zero (unless below the horizon). `threads`: worker threads, 0 = one per
+// or decoded and Validate()d). kInvalidArgument for a depth outside 2..21, a light whose travel
+// is NaN, infinite or zero (unless below the horizon) or whose bias fails CheckShadowBias. `threads`: worker threads, 0 = one per
 // core; the answer never depends on it. Cost: one ray per voxel, skipping empty octants.
 StatusOr<std::vector<uint8_t>> ShadowedVoxels(const Svdag& dag, const Light& light, int threads = 0);
 
