@@ -17,11 +17,14 @@
 #include "pointdag/shadow/voxel_shadows.h"
 #include "pointdag/voxelize/morton.h"
 #include "pointdag/voxelize/voxelizer.h"
+#include "shadow_brute_force.h"
 #include "test_util.h"
 
 namespace pointdag {
 namespace {
 
+using testing::BruteForceShadows;
+using testing::Shadows;
 using Cell = std::array<uint32_t, 3>;
 
 Svdag DagOf(const std::vector<uint64_t>& sorted_codes, int depth) {
@@ -34,26 +37,6 @@ Light BiasedLight(double x, double y, double z, double bias) {
   Light light = LightFromDirection(x, y, z).value();
   light.bias_voxels = bias;
   return light;
-}
-
-std::vector<uint8_t> Shadows(const Svdag& dag, const Light& light) {
-  auto shadowed = ShadowedVoxels(dag, light, 2);
-  EXPECT_TRUE(shadowed.ok()) << shadowed.status().ToString();
-  return shadowed.ok() ? shadowed.value() : std::vector<uint8_t>{};
-}
-
-// The definition with the bias, literally: every other voxel against the ray beyond the bias. O(n^2).
-std::vector<uint8_t> BruteForce(const std::vector<uint64_t>& codes, const Light& light) {
-  std::vector<Cell> cells;
-  for (uint64_t code : codes) cells.push_back(MortonDecode(code));
-  std::vector<uint8_t> shadowed(cells.size(), 0);
-  for (size_t i = 0; i < cells.size(); ++i) {
-    const std::array<double, 3> centre{cells[i][0] + 0.5, cells[i][1] + 0.5, cells[i][2] + 0.5};
-    for (size_t j = 0; j < cells.size() && !shadowed[i]; ++j) {
-      if (j != i && RayMeetsCell(centre, light.travel, cells[j], light.bias_voxels)) shadowed[i] = 1;
-    }
-  }
-  return shadowed;
 }
 
 size_t Differences(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
@@ -99,7 +82,7 @@ TEST(ShadowedVoxels, FlatGroundIsLitOnceTheBiasReachesHalfOverSinElevation) {
 
     light.bias_voxels = threshold;
     EXPECT_EQ(Count(Shadows(dag, light)), 0u) << what;
-    EXPECT_EQ(Differences(Shadows(dag, light), BruteForce(codes, light)), 0u) << what;
+    EXPECT_EQ(Differences(Shadows(dag, light), BruteForceShadows(codes, light)), 0u) << what;
 
     light.bias_voxels = std::nextafter(threshold, 0.0);
     const auto below = Shadows(dag, light);
@@ -108,7 +91,7 @@ TEST(ShadowedVoxels, FlatGroundIsLitOnceTheBiasReachesHalfOverSinElevation) {
       const double x = MortonDecode(codes[i])[0] + 0.5;
       EXPECT_EQ(below[i], x >= 0.5 * cos_e / sin_e ? 1 : 0) << what << ", x " << x;
     }
-    EXPECT_EQ(Differences(below, BruteForce(codes, light)), 0u) << what;
+    EXPECT_EQ(Differences(below, BruteForceShadows(codes, light)), 0u) << what;
   }
 }
 
@@ -134,7 +117,7 @@ TEST(ShadowedVoxels, BiasedRaysAgreeWithBruteForceOnClutter) {
       for (double bias : {0.0, 0.25, 0.5, 1.0, std::sqrt(3.0), 3.0, 16.0}) {
         const Light light = BiasedLight(d[0], d[1], d[2], bias);
         const auto got = Shadows(dag, light);
-        EXPECT_EQ(Differences(got, BruteForce(codes, light)), 0u) << "depth " << depth << " bias " << bias;
+        EXPECT_EQ(Differences(got, BruteForceShadows(codes, light)), 0u) << "depth " << depth << " bias " << bias;
         // A larger bias only ever ignores occluders.
         for (size_t i = 0; i < previous.size(); ++i) ASSERT_LE(got[i], previous[i]) << "bias " << bias;
         previous = got;
@@ -161,7 +144,7 @@ TEST(ShadowedVoxels, BiasOnARealScanReachesTheDagAndSunHours) {
     const Light light = BiasedLight(-std::cos(e) * std::sqrt(0.5), std::cos(e) * std::sqrt(0.5), -std::sin(e), bias);
     suns.push_back(light);
     const auto exact = Shadows(dag, light);
-    EXPECT_EQ(Differences(exact, BruteForce(codes, light)), 0u) << "bias " << bias;
+    EXPECT_EQ(Differences(exact, BruteForceShadows(codes, light)), 0u) << "bias " << bias;
     auto shadow_dag = BuildShadowDag(dag, light);
     ASSERT_TRUE(shadow_dag.ok()) << shadow_dag.status().ToString();
     EXPECT_EQ(shadow_dag->stats().shadowed_voxels, Count(exact));

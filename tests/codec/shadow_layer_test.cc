@@ -201,7 +201,8 @@ TEST(ShadowLayer, CoarseLightIsTheMeanOfTheFineVoxelsItCovers) {
       const auto [x, y, z] = MortonDecode(code >> 24);
       expected[{level, x, y, z}].push_back(static_cast<uint8_t>(std::lround(255.0 * static_cast<double>(lit) / static_cast<double>(n * samples))));
     }
-    for (const auto& [key, light] : expected) {
+    for (const auto& [tile, light] : expected) {
+      const TileKey key = tile;  // clang 14 cannot capture a structured binding
       const auto found = std::find_if(layers->begin(), layers->end(), [&](const TileShadowLayer& t) { return t.key == key; });
       ASSERT_NE(found, layers->end()) << "no layer for tile " << key.level << "/" << key.x << "/" << key.y << "/" << key.z;
       EXPECT_EQ(found->layer.light, light);

@@ -11,11 +11,14 @@
 #include "pointdag/shadow/voxel_shadows.h"
 #include "pointdag/voxelize/morton.h"
 #include "pointdag/voxelize/voxelizer.h"
+#include "shadow_brute_force.h"
 #include "test_util.h"
 
 namespace pointdag {
 namespace {
 
+using testing::BruteForceShadows;
+using testing::Shadows;
 using Cell = std::array<uint32_t, 3>;
 
 Svdag DagOf(std::vector<uint64_t> codes, int depth, CountMode mode = CountMode::kLeaves) {
@@ -30,26 +33,6 @@ Light MakeLight(double x, double y, double z) {
   auto light = LightFromDirection(x, y, z);
   EXPECT_TRUE(light.ok()) << light.status().ToString();
   return light.value();
-}
-
-std::vector<uint8_t> Shadows(const Svdag& dag, const Light& light, int threads = 0) {
-  auto shadowed = ShadowedVoxels(dag, light, threads);
-  EXPECT_TRUE(shadowed.ok()) << shadowed.status().ToString();
-  return shadowed.ok() ? shadowed.value() : std::vector<uint8_t>{};
-}
-
-// The definition, literally: every other voxel tested against the ray. O(n^2).
-std::vector<uint8_t> BruteForce(const std::vector<uint64_t>& codes, const Light& light) {
-  std::vector<Cell> cells;
-  for (uint64_t code : codes) cells.push_back(MortonDecode(code));
-  std::vector<uint8_t> shadowed(cells.size(), 0);
-  for (size_t i = 0; i < cells.size(); ++i) {
-    const std::array<double, 3> centre{cells[i][0] + 0.5, cells[i][1] + 0.5, cells[i][2] + 0.5};
-    for (size_t j = 0; j < cells.size() && !shadowed[i]; ++j) {
-      if (j != i && RayMeetsCell(centre, light.travel, cells[j])) shadowed[i] = 1;
-    }
-  }
-  return shadowed;
 }
 
 // Index of the first disagreement, or -1; reports the voxel.
@@ -185,7 +168,7 @@ TEST(ShadowedVoxels, GrazingEdgesAgreeWithBruteForce) {
   const Svdag dag = DagOf(codes, kPlaneDepth);
   for (auto t : {std::array<double, 3>{1, 0, -1}, {1, 1, -1}, {-1, 1, -1}, {1, 1, 0}, {1, 0, 0}}) {
     const Light light = MakeLight(t[0], t[1], t[2]);
-    ExpectSame(Shadows(dag, light), BruteForce(codes, light), codes, "grazing light");
+    ExpectSame(Shadows(dag, light), BruteForceShadows(codes, light), codes, "grazing light");
   }
   // The plane voxel at x = 0 has no -x neighbour whose top edge it grazes; x = 1 has.
   const auto diagonal = Shadows(dag, MakeLight(1, 0, -1));
@@ -245,7 +228,7 @@ TEST(ShadowedVoxels, RandomClutterAgreesWithBruteForce) {
     const Svdag dag = DagOf(placed, depth);
     for (const auto& d : directions) {
       const Light light = MakeLight(d[0], d[1], d[2]);
-      ExpectSame(Shadows(dag, light), BruteForce(placed, light), placed, "clutter depth " + std::to_string(depth));
+      ExpectSame(Shadows(dag, light), BruteForceShadows(placed, light), placed, "clutter depth " + std::to_string(depth));
     }
   }
 }
@@ -276,7 +259,7 @@ TEST_P(ScanShadows, AgreeWithBruteForceOnEveryVoxel) {
   for (const auto& d : directions) {
     const Light light = MakeLight(d[0], d[1], d[2]);
     const auto got = Shadows(dag, light, 2);
-    ExpectSame(got, BruteForce(codes, light), codes,
+    ExpectSame(got, BruteForceShadows(codes, light), codes,
                "direction (" + std::to_string(d[0]) + ", " + std::to_string(d[1]) + ", " + std::to_string(d[2]) + ")");
     for (uint8_t s : got) shadowed_total += s;
   }

@@ -23,15 +23,9 @@ namespace {
 
 using client::Response;
 
-class ShadowQuery : public ::testing::Test {
- protected:
-  void SetUp() override {
-    SKIP_WITHOUT_DATA();
-    ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start";
-  }
-  static void TearDownTestSuite() { daemon_.Stop(); }
-  static std::string Ingest(const std::string& scan, const std::string& query) { return IngestScan(*daemon_->Connect(), scan, query); }
-  static inline SuiteDaemon daemon_{"pointdagd-shadow-query-test"};
+class ShadowQuery : public ShadowSuite<ShadowQuery> {
+ public:
+  static constexpr const char* kDaemonName = "pointdagd-shadow-query-test";
 };
 
 // The set's shadow DAG (for one light): stored with the layers, served as bytes, and asked point by
@@ -189,15 +183,8 @@ TEST(ShadowDagStore, AnOlderStoreGetsTheTableAndCheckReadsTheDag) {
   testing::ScratchDir scratch;
   Daemon daemon(scratch.path());
   ASSERT_TRUE(daemon.Start());
-  std::string id;
-  {
-    auto c = daemon.Connect();
-    const nlohmann::json ingest = WaitForJob(*c, SubmitScan(*c, "tiny_1.2-with-color_1065pts.las", "name=old&voxel=2"));
-    ASSERT_EQ(ingest["status"], "done");
-    id = ingest["dataset_id"].get<std::string>();
-    const Response posted = Post(*c, "/v1/datasets/" + id + "/shadows", R"({"direction": [0, 0, -1]})");
-    ASSERT_EQ(WaitForJob(*c, posted.Header("location"))["status"], "done");
-  }
+  const std::string id = IngestAndShade(daemon, "tiny_1.2-with-color_1065pts.las", "name=old&voxel=2", R"({"direction": [0, 0, -1]})");
+  ASSERT_FALSE(id.empty());
   daemon.Stop(SIGTERM);
   ASSERT_TRUE(testing::ExecSql(daemon.store(), "DROP TABLE shadow_dags"));
   ASSERT_TRUE(daemon.Start());

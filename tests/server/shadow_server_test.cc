@@ -72,15 +72,9 @@ uint64_t ExpectServedLayers(client::Connection& c, const std::string& dataset, c
   return bytes;
 }
 
-class ShadowServer : public ::testing::Test {
- protected:
-  void SetUp() override {
-    SKIP_WITHOUT_DATA();
-    ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start";
-  }
-  static void TearDownTestSuite() { daemon_.Stop(); }
-  static std::string Ingest(const std::string& scan, const std::string& query) { return IngestScan(*daemon_->Connect(), scan, query); }
-  static inline SuiteDaemon daemon_{"pointdagd-shadow-test"};
+class ShadowServer : public ShadowSuite<ShadowServer> {
+ public:
+  static constexpr const char* kDaemonName = "pointdagd-shadow-test";
 };
 
 TEST_F(ShadowServer, EveryRouteAnswersItsStatusAndMessage) {
@@ -444,15 +438,8 @@ TEST(ShadowCheck, ReportsAMissingAndADamagedLayer) {
   testing::ScratchDir scratch;
   Daemon daemon(scratch.path());
   ASSERT_TRUE(daemon.Start());
-  std::string id;
-  {
-    auto c = daemon.Connect();
-    const nlohmann::json ingest = WaitForJob(*c, SubmitScan(*c, "autzen_trim_pdrf3_rgb.las", "name=check&voxel=0.5"));
-    ASSERT_EQ(ingest["status"], "done");
-    id = ingest["dataset_id"].get<std::string>();
-    const Response posted = Post(*c, "/v1/datasets/" + id + "/shadows", R"({"direction": [0, 0, -1]})");
-    ASSERT_EQ(WaitForJob(*c, posted.Header("location"))["status"], "done");
-  }
+  const std::string id = IngestAndShade(daemon, "autzen_trim_pdrf3_rgb.las", "name=check&voxel=0.5", R"({"direction": [0, 0, -1]})");
+  ASSERT_FALSE(id.empty());
   daemon.Stop(SIGTERM);
   const auto check = [&] { return RunCheck(daemon.var()); };
   EXPECT_EQ(check().first, 0) << check().second;

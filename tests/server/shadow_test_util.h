@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "daemon_util.h"
+#include "test_util.h"
 
 namespace pointdag {
 
@@ -29,6 +30,22 @@ inline std::string ErrorOf(const client::Response& r) {
   return j.is_object() && j.contains("error") && j["error"].is_string() ? j["error"].get<std::string>() : "(no error member) " + r.body;
 }
 
+// A suite with its own pointdagd named Suite::kDaemonName, started by its first test (SuiteDaemon),
+// skipped with the reason when ../shared/data is absent.
+template <typename Suite>
+class ShadowSuite : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SKIP_WITHOUT_DATA();
+    ASSERT_TRUE(daemon_.Start()) << "the suite's pointdagd did not start";
+  }
+  static void TearDownTestSuite() { daemon_.Stop(); }
+  static std::string Ingest(const std::string& scan, const std::string& query) {
+    return IngestScan(*daemon_->Connect(), scan, query);
+  }
+  static inline SuiteDaemon daemon_{Suite::kDaemonName};
+};
+
 // Posts a shadows request and waits for its job; the job's last state.
 inline nlohmann::json Shade(client::Connection& c, const std::string& dataset, const std::string& body) {
   const client::Response r = Post(c, dataset + "/shadows", body);
@@ -36,6 +53,18 @@ inline nlohmann::json Shade(client::Connection& c, const std::string& dataset, c
   if (r.status != 202) return {};
   EXPECT_EQ(Json(r)["kind"], "shadows");
   return WaitForJob(c, r.Header("location"));
+}
+
+// Ingests `scan` into `daemon` and has a shadow set computed for `body`: the dataset's id, or "" with a
+// test failure.
+inline std::string IngestAndShade(Daemon& daemon, const std::string& scan, const std::string& query,
+                                  const std::string& body) {
+  auto c = daemon.Connect();
+  const std::string dataset = IngestScan(*c, scan, query);
+  if (dataset.empty()) return "";
+  const nlohmann::json job = Shade(*c, dataset, body);
+  EXPECT_EQ(job["status"], "done") << job.dump();
+  return job["status"] == "done" ? dataset.substr(std::string("/v1/datasets/").size()) : "";
 }
 
 // pointdagd --check on a stopped daemon's folder: exit code and output.
