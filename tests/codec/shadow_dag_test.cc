@@ -176,6 +176,7 @@ TEST(ShadowDag, FreeSpaceAnswersTheAirToo) {
     ASSERT_TRUE(shadow.ok()) << shadow.status().ToString();
     EXPECT_EQ(Mismatches(*shadow, dag, ShadowedVoxels(dag, light).value()), 0u);
     const auto frame = LightFrame::Create(light.travel, dag.depth, dag.depth + 2).value();
+    const std::array<double, 3> travel = light.travel;  // clang 14 cannot capture a structured binding
     std::vector<std::array<uint32_t, 3>> voxels;
     dag.ForEachVoxel([&](uint64_t morton) { voxels.push_back(MortonDecode(morton)); });
     std::mt19937 rng(3);
@@ -192,7 +193,7 @@ TEST(ShadowDag, FreeSpaceAnswersTheAirToo) {
         return p[0] >= k[0] && p[0] <= k[0] + 1.0 && p[1] >= k[1] && p[1] <= k[1] + 1.0 && p[2] >= k[2] && p[2] <= k[2] + 1.0;
       };
       if (std::any_of(voxels.begin(), voxels.end(), inside)) continue;  // undefined
-      const bool expected = std::any_of(voxels.begin(), voxels.end(), [&](const auto& k) { return RayMeetsCell(p, light.travel, k); });
+      const bool expected = std::any_of(voxels.begin(), voxels.end(), [&](const auto& k) { return RayMeetsCell(p, travel, k); });
       if (p[0] < 0 || p[1] < 0 || p[2] < 0 || p[0] > grid || p[1] > grid || p[2] > grid) continue;  // outside the grid
       ++air;
       shadowed_air += expected;
