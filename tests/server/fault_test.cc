@@ -184,6 +184,9 @@ TEST_F(FaultTest, ADiskFullFailsTheJobAndKeepsWhatWasStored) {
 
   const std::string location = SubmitScan(*c, "autzen_trim_pdrf3_rgb.las", "name=autzen");
   ASSERT_FALSE(location.empty());
+  // The disk fills once the job has recorded its start (else it fails there, before the commit this
+  // test is about: seen under ASan on a loaded machine).
+  ASSERT_TRUE(Eventually([&] { return Json(*c->Request("GET", location))["status"] != "queued"; }));
   const auto filler = var() / "filler";
   {
     const int fd = ::open(filler.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
