@@ -2,6 +2,6 @@
 #include "color_fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  pointdag::fuzz::DecodeColorSection(pointdag::ColorCodec::kFixedRate, data, size);
+  pointdag::fuzz::DecodeColorSection(pointdag::ColorCodec::kFixedRate, data, size, /*morton=*/true);  // version 3 needs the voxels
   return 0;
 }

@@ -83,7 +83,7 @@ nlohmann::json VersusCase(const std::filesystem::path& scan, const GpccReference
   // VBR at targets bracketing 34..42 dB: the curve is interpolated at exactly 34, 38 and 42.
   std::vector<RatePoint> vbr;
   for (double target : {32.0, 34.0, 36.0, 38.0, 40.0, 42.0, 44.0}) {
-    auto colors = EncodeColors(grid.colors, {ColorCodec::kVariableRate, target});
+    auto colors = EncodeColors(grid.colors, {ColorCodec::kVariableRate, target}, grid.morton);
     if (!colors.ok()) return {{"error", colors.status().ToString()}};
     vbr.push_back({colors->psnr.y, 8.0 * static_cast<double>(colors->bytes.size()) / voxels});
   }

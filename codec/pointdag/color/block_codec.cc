@@ -214,14 +214,19 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                               BlockLayout layout) {
-  return SerializeBlocksAsVersion(colors, blocks, layout, kBlockStreamVersion);
+                                               BlockLayout layout, std::span<const uint64_t> morton) {
+  return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kFirstSpatialVersion - 1 : kBlockStreamVersion, morton);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                                        BlockLayout layout, uint8_t version) {
+                                                        BlockLayout layout, uint8_t version, std::span<const uint64_t> morton) {
   if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
+  if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
+    return InvalidArgument("color stream version 3 needs one Morton code per color");
+  }
   const DifferenceCode code{version >= 2};
+  std::optional<WeightContexts> spatial;
+  if (version >= kFirstSpatialVersion) spatial.emplace(morton);
   std::vector<uint8_t> out = {version, static_cast<uint8_t>(layout), 0, 0};
   PutVarint(out, colors.size());
   PutVarint(out, blocks.size());
@@ -246,9 +251,13 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = ChooseWeight(colors[i], b.ends, b.bits);
-        EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][prev_w], w, b.bits);
+        const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
+        EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
+        if (spatial) spatial->Record(i, Interpolate(b.ends, w, b.bits));
         prev_w = w;
       }
+    } else if (spatial) {
+      for (uint32_t i = b.start; i < b.start + b.length; ++i) spatial->Record(i, b.ends.a);
     }
     prev_bits = b.bits;
     prev_a = b.ends.a;

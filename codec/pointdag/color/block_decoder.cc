@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "pointdag/color/block_stream.h"
@@ -28,7 +29,8 @@ void DecodeRun(const Endpoints& ends, const uint64_t* words, uint64_t bit_offset
 
 }  // namespace
 
-StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count) {
+StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count,
+                                                    std::span<const uint64_t> morton) {
   if (stored.size() < 4) return Truncated("color stream is shorter than its header");
   if (stored[0] < 1 || stored[0] > kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
   const DifferenceCode code{stored[0] >= 2};
@@ -43,6 +45,10 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   if (payload_size != stored.size() - pos) return Truncated("color stream is not as long as its header says");
   if (count != expected_count) return Corrupt("color stream holds " + std::to_string(count) + " colors, expected " + std::to_string(expected_count));
   if (count > 0xFFFFFFFFull || blocks > count || (count > 0 && blocks == 0)) return Corrupt("color stream block count is impossible");
+  const bool spatial_contexts = stored[0] >= kFirstSpatialVersion;
+  if (spatial_contexts && morton.size() != count) {
+    return Corrupt("color stream has spatial contexts, but there are no voxels' Morton codes for them");
+  }
   // A block of 16384 colors costs at least 11 raw bits of its length's gamma code, and no block
   // covers more colors per bit: a byte of payload holds less than one macro block of colors.
   if (count / kMacroBlockColors > payload_size + 8) {
@@ -52,6 +58,9 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
 
   BlockColorDecoder d;
   d.count_ = count;
+  // After the checks above: it allocates by `count`, which the caller's Morton codes bear out.
+  std::optional<WeightContexts> spatial;
+  if (spatial_contexts) spatial.emplace(morton);
   auto models = std::make_unique<BlockModels>();
   BinaryRangeDecoder rc(stored.subspan(pos));
   uint64_t next = 0, weight_bits = 0;
@@ -88,12 +97,15 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     uint32_t prev_w = 16;
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     for (uint32_t i = 0; bits && i < length; ++i) {
-      const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][prev_w], bits);
+      const uint32_t context = spatial ? spatial->Of(next + i, ends, bits, prev_w) : prev_w;
+      const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][context], bits);
       d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);
       if ((weight_bits & 63) + static_cast<uint64_t>(bits) > 64) d.weights_[(weight_bits >> 6) + 1] |= uint64_t{w} >> (64 - (weight_bits & 63));
       weight_bits += static_cast<uint64_t>(bits);
+      if (spatial) spatial->Record(next + i, Interpolate(ends, w, bits));
       prev_w = w;
     }
+    for (uint32_t i = 0; spatial && !bits && i < length; ++i) spatial->Record(next + i, ends.a);
     if (rc.overrun()) return Truncated("color stream is cut short");
     next += length;
     prev_bits = bits;

@@ -9,22 +9,29 @@
 #include <vector>
 
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/weight_context.h"
 #include "pointdag/entropy/adaptive_codes.h"
 
 namespace pointdag {
 
-// Version 2 codes the endpoint differences decorrelated (DifferenceCode below); version 1 is still read.
-constexpr uint8_t kBlockStreamVersion = 2;
+// Version 2 codes the endpoint differences decorrelated (DifferenceCode below); version 3 (leaf mode,
+// colors one per voxel in Morton order) codes the weights with spatial contexts (weight_context.h);
+// versions 1 and 2 are still read, and version 2 is still written without the voxels' Morton codes
+// (mipmap colors, whose order is not the voxels').
+constexpr uint8_t kBlockStreamVersion = 3;
+constexpr uint8_t kFirstSpatialVersion = 3;
 
 // Models of the block stream. Contexts: the previous block's width for lengths and widths; the
-// component for endpoint differences (and the width for B - A); the width and the previous weight of
-// the same block for weights, since Morton neighbours tend to sit at the same point of a gradient.
+// component for endpoint differences (and the width for B - A); the width and, for weights, the
+// previous weight of the same block (versions 1 and 2: 0..16, 16 = first of a block), since Morton
+// neighbours tend to sit at the same point of a gradient, or the spatial context (version 3:
+// 0..kSpatialWeightContexts - 1).
 struct BlockModels {
   std::array<GammaModel, kMaxWeightBits + 1> length;
   std::array<BitTreeModel<3>, kMaxWeightBits + 1> width;
   std::array<GammaModel, 3> a;
   std::array<std::array<GammaModel, 3>, kMaxWeightBits + 1> b;
-  std::array<std::array<BitTreeModel<kMaxWeightBits>, 17>, kMaxWeightBits + 1> weight;  // 16 = first of a block
+  std::array<std::array<BitTreeModel<kMaxWeightBits>, kSpatialWeightContexts>, kMaxWeightBits + 1> weight;
 };
 
 constexpr int kLengthBits = std::bit_width(kMacroBlockColors);
@@ -48,9 +55,10 @@ struct DifferenceCode {
   }
 };
 
-// SerializeBlocks writing the given stream version (1 or 2): older versions stay writable so that
-// tests can check they still decode.
+// SerializeBlocks writing the given stream version (1..3; 3 needs `morton`): older versions stay
+// writable so that tests can check they still decode.
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                                        BlockLayout layout, uint8_t version);
+                                                        BlockLayout layout, uint8_t version,
+                                                        std::span<const uint64_t> morton = {});
 
 }  // namespace pointdag

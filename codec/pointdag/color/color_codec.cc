@@ -27,10 +27,11 @@ BlockLayout LayoutOf(ColorCodec codec) {
 }
 
 // The stored section of `blocks`, measured by decoding it.
-StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                          std::span<const uint64_t> judged, ColorCodec codec,
                                           std::span<const ColorBlock> blocks, double max_mse) {
-  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec)));
-  ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream, colors.size()));
+  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec), morton));
+  ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(stream, colors.size(), morton));
   EncodedColors out;
   out.codec = codec;
   out.max_mse = max_mse;
@@ -41,21 +42,23 @@ StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::spa
   return out;
 }
 
-StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                       std::span<const uint64_t> judged, ColorCodec codec,
                                        double max_mse) {
   ASSIGN_OR_RETURN(const std::vector<ColorBlock> blocks, EncodeBlocks(colors, LayoutOf(codec), max_mse));
-  return SerializeMeasured(colors, judged, codec, blocks, max_mse);
+  return SerializeMeasured(colors, morton, judged, codec, blocks, max_mse);
 }
 
 // About one encode (block_target.h); the decoded colors are measured again, and should rounding
 // put them a hair under the target, the exact encode (threshold 0) is stored instead.
-StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> judged, ColorCodec codec,
+StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                              std::span<const uint64_t> judged, ColorCodec codec,
                                               double target, std::optional<double> hint) {
   ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target, hint));
-  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, judged, codec, found.blocks, found.max_mse));
+  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, morton, judged, codec, found.blocks, found.max_mse));
   out.encodes = found.encodes;
   if (out.psnr.y >= target) return out;
-  ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, judged, codec, 0));
+  ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, morton, judged, codec, 0));
   out.encodes = found.encodes + 1;
   return out;
 }
@@ -178,11 +181,11 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
     }
     return out;
   }
-  if (!options.target_psnr_y) return EncodeBlocksAt(colors, judged, options.codec, options.max_mse);
+  if (!options.target_psnr_y) return EncodeBlocksAt(colors, morton, judged, options.codec, options.max_mse);
 
   const double target = *options.target_psnr_y;
   if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
-  return EncodeBlocksForTarget(colors, judged, options.codec, target, options.threshold_hint);
+  return EncodeBlocksForTarget(colors, morton, judged, options.codec, target, options.threshold_hint);
 }
 
 }  // namespace pointdag

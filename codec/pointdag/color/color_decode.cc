@@ -50,7 +50,7 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
       return DecodeLosslessZstd(payload, count);
     case ColorCodec::kFixedRate:
     case ColorCodec::kVariableRate: {
-      ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload, count));
+      ASSIGN_OR_RETURN(BlockColorDecoder decoder, BlockColorDecoder::Open(payload, count, morton));
       return decoder.DecodeAll();
     }
     case ColorCodec::kPng:

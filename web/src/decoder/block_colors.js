@@ -5,8 +5,10 @@
 import { corrupt } from './pdag_error.js';
 import { GAMMA_MODELS, RangeDecoder, bitTreeModels, newModels, unZigZag } from './range_coder.js';
 import { readVarint } from './varint.js';
+import { WeightContexts, SPATIAL_WEIGHT_CONTEXTS } from './weight_contexts.js';
 
-const STREAM_VERSION = 2;  // 1 still read
+const STREAM_VERSION = 3;  // 1 and 2 still read
+const FIRST_SPATIAL_VERSION = 3;
 const LAYOUT_FIXED = 1;
 const LAYOUT_VARIABLE = 2;
 const FIXED_BITS = 3;
@@ -22,11 +24,14 @@ const A_BASE = WIDTH_BASE + WIDTHS * bitTreeModels(3);
 const B_BASE = A_BASE + 3 * GAMMA_MODELS;
 const WEIGHT_BASE = B_BASE + WIDTHS * 3 * GAMMA_MODELS;
 const WEIGHT_TREE = bitTreeModels(MAX_WEIGHT_BITS);
-const MODEL_COUNT = WEIGHT_BASE + WIDTHS * 17 * WEIGHT_TREE;  // 17 previous weights: 16 = first of a block
+// Per width: 17 previous weights (16 = first of a block) in versions 1 and 2, 33 spatial contexts in 3.
+const WEIGHT_CONTEXTS = SPATIAL_WEIGHT_CONTEXTS;
+const MODEL_COUNT = WEIGHT_BASE + WIDTHS * WEIGHT_CONTEXTS * WEIGHT_TREE;
 
-// `stored`: the stream after the section's codec byte; `expectedCount` from decoded geometry.
-// -> Uint8Array(3 * expectedCount), RGB per color.
-export function decodeBlockColors(stored, expectedCount) {
+// `stored`: the stream after the section's codec byte; `expectedCount` from decoded geometry;
+// `coords`: the voxels' cells (x, y, z per voxel in Morton order) where the colors are one per voxel
+// (leaf mode), else null; version 3 streams need them. -> Uint8Array(3 * expectedCount), RGB per color.
+export function decodeBlockColors(stored, expectedCount, coords = null) {
   if (stored.length < 4) throw corrupt('color stream is shorter than its header');
   if (stored[0] < 1 || stored[0] > STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
   // DifferenceCode of block_stream.h: version 2 codes (dG, dR - dG, dB - dG), version 1 (dR, dG, dB).
@@ -42,11 +47,16 @@ export function decodeBlockColors(stored, expectedCount) {
   if (payloadSize !== stored.length - cursor.pos) throw corrupt('color stream is not as long as its header says');
   if (count !== expectedCount) throw corrupt(`color stream holds ${count} colors, expected ${expectedCount}`);
   if (count > 0xffffffff || blocks > count || (count > 0 && blocks === 0)) throw corrupt('color stream block count is impossible');
+  const spatialContexts = stored[0] >= FIRST_SPATIAL_VERSION;
+  if (spatialContexts && (coords === null || coords.length !== 3 * count)) {
+    throw corrupt("color stream has spatial contexts, but there are no voxels' Morton codes for them");
+  }
   // No block codes more than a macro block of colors per byte of payload.
   if (Math.floor(count / MACRO_BLOCK) > payloadSize + 8) {
     throw corrupt(`color stream declares ${count} colors, more than its ${payloadSize} bytes can hold`);
   }
 
+  const spatial = spatialContexts ? new WeightContexts(coords) : null;
   const p = newModels(MODEL_COUNT);
   const rc = new RangeDecoder(stored, cursor.pos);
   let out = new Uint8Array(3 * Math.min(count, 4 * MACRO_BLOCK));
@@ -97,10 +107,11 @@ export function decodeBlockColors(stored, expectedCount) {
         palette[3 * w + 1] = ((ag * (m - w) + bg * w + (m >> 1)) / m) | 0;
         palette[3 * w + 2] = ((ab * (m - w) + bb * w + (m >> 1)) / m) | 0;
       }
-      const wBase = WEIGHT_BASE + bits * 17 * WEIGHT_TREE;
+      const wBase = WEIGHT_BASE + bits * WEIGHT_CONTEXTS * WEIGHT_TREE;
       let prevW = 16;
       for (let i = 0; i < length; ++i, o += 3) {
-        const w = rc.bitTree(p, wBase + prevW * WEIGHT_TREE, bits);
+        const context = spatial ? spatial.of(next + i, out, ar, ag, ab, br, bg, bb, bits, prevW) : prevW;
+        const w = rc.bitTree(p, wBase + context * WEIGHT_TREE, bits);
         out[o] = palette[3 * w];
         out[o + 1] = palette[3 * w + 1];
         out[o + 2] = palette[3 * w + 2];

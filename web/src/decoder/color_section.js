@@ -18,8 +18,10 @@ export function unsupportedColorCodec(codec) {
   return null;
 }
 
-// `count` must come from decoded geometry. -> Uint8Array(3 * count), RGB per color, owned.
-export function decodeColors(section, count) {
+// `count` must come from decoded geometry; `coords`: the voxels' cells in Morton order where the
+// colors are one per voxel (leaf mode), else null (block streams of version 3 need them).
+// -> Uint8Array(3 * count), RGB per color, owned.
+export function decodeColors(section, count, coords = null) {
   if (section.length === 0) throw corrupt('colors section is empty');
   if (count === 0) throw corrupt('a colors section for no voxels');
   if (count > MAX_COLORS) throw resourceLimit(`${count} colors are more than a colors section may hold`);
@@ -29,7 +31,7 @@ export function decodeColors(section, count) {
     if (payload.length !== 3 * count) throw corrupt('raw colors do not hold one RGB per voxel');
     return payload.slice();
   }
-  if (codec === CODEC_FIXED3 || codec === CODEC_VBR) return decodeBlockColors(payload, count);
+  if (codec === CODEC_FIXED3 || codec === CODEC_VBR) return decodeBlockColors(payload, count, coords);
   const why = unsupportedColorCodec(codec);
   if (why) throw unsupported(`${why} are not read by this decoder`);
   throw corrupt(`colors section names unknown codec ${codec}`);

@@ -53,7 +53,14 @@ export function decodePdag(bytes, limits = DEFAULT_LIMITS) {
     throw resourceLimit(`.pdag geometry holds ${dag.rootCount} nodes, more than the ${maxVoxels} this decoder allows`);
   }
   if (dag.rootVoxels !== voxels) throw corrupt('.pdag metadata voxel count disagrees with its geometry');
-  const nodeColors = file.colors ? decodeColors(file.colors, dag.mode === COUNT_LEAVES ? voxels : dag.rootCount) : null;
-  const { coords, colors } = enumerateVoxels(dag, voxels, nodeColors);
+  let coords, colors;
+  if (file.colors && dag.mode === COUNT_LEAVES) {
+    // One color per voxel in Morton order: the colors' spatial contexts need the voxels first.
+    ({ coords } = enumerateVoxels(dag, voxels, null));
+    colors = decodeColors(file.colors, voxels, coords);
+  } else {
+    const nodeColors = file.colors ? decodeColors(file.colors, dag.rootCount) : null;
+    ({ coords, colors } = enumerateVoxels(dag, voxels, nodeColors));
+  }
   return { meta: file.meta.root, depth, voxelSize, origin, count: voxels, coords, colors };
 }

@@ -1,0 +1,144 @@
+// Block color stream version 3: the weights' spatial contexts (color/weight_context.h).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "pointdag/color/block_codec.h"
+#include "pointdag/color/block_stream.h"
+#include "pointdag/color/color_codec.h"
+#include "pointdag/pipeline.h"
+#include "pointdag/voxelize/morton.h"
+#include "test_util.h"
+
+namespace pointdag {
+namespace {
+
+// A wavy surface of voxels (two layers where it is steep, holes here and there) and colors that
+// vary smoothly over it with noise: neighbours in 3D are near in color, as on a scan.
+struct Surface {
+  std::vector<uint64_t> morton;
+  std::vector<Rgb8> colors;
+};
+
+Surface WavySurface(uint32_t side, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::pair<uint64_t, Rgb8>> voxels;
+  std::normal_distribution<double> noise(0.0, 4.0);
+  for (uint32_t x = 0; x < side; ++x) {
+    for (uint32_t y = 0; y < side; ++y) {
+      if (rng() % 11 == 0) continue;  // a hole
+      const double h = 20 + 8 * std::sin(x / 9.0) + 6 * std::cos(y / 7.0);
+      const auto ch = [&](double base) { return static_cast<uint8_t>(std::clamp(std::lround(base + noise(rng)), 0l, 255l)); };
+      const Rgb8 c{ch(128 + 100 * std::sin(x / 23.0)), ch(128 + 90 * std::cos(y / 17.0)), ch(60 + h)};
+      for (uint32_t z = static_cast<uint32_t>(h); z <= static_cast<uint32_t>(h) + (x % 5 == 0); ++z) {
+        voxels.push_back({MortonEncode(x, y, z), c});
+      }
+    }
+  }
+  std::sort(voxels.begin(), voxels.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  Surface s;
+  for (const auto& [code, color] : voxels) s.morton.push_back(code), s.colors.push_back(color);
+  return s;
+}
+
+TEST(BlockStreamV3, DecodesToTheSameColorsAsVersionTwoInFewerBytes) {
+  const Surface s = WavySurface(160, 1);  // ~27000 voxels: two macro blocks
+  for (BlockLayout layout : {BlockLayout::kVariableRate, BlockLayout::kFixedRate}) {
+    const auto blocks = *EncodeBlocks(s.colors, layout, 12.0);
+    const auto v2 = *SerializeBlocks(s.colors, blocks, layout);
+    const auto v3 = *SerializeBlocks(s.colors, blocks, layout, s.morton);
+    ASSERT_EQ(v2[0], 2);
+    ASSERT_EQ(v3[0], 3);
+    EXPECT_LT(v3.size(), v2.size());
+    auto old = BlockColorDecoder::Open(v2, s.colors.size());
+    auto spatial = BlockColorDecoder::Open(v3, s.colors.size(), s.morton);
+    ASSERT_TRUE(old.ok() && spatial.ok()) << spatial.status().ToString();
+    const std::vector<Rgb8> colors = spatial->DecodeAll();
+    EXPECT_EQ(colors, old->DecodeAll());
+    // Random access after Open: one color at a time, without its neighbours.
+    for (uint64_t i = 0; i < colors.size(); i += 13) ASSERT_EQ(spatial->At(i), colors[i]) << i;
+  }
+}
+
+TEST(BlockStreamV3, IsRefusedWithoutTheVoxelsMortonCodes) {
+  const Surface s = WavySurface(40, 2);
+  const auto v3 = *SerializeBlocks(s.colors, *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 12.0), BlockLayout::kVariableRate, s.morton);
+  const auto missing = BlockColorDecoder::Open(v3, s.colors.size()).status();
+  EXPECT_EQ(missing.code(), StatusCode::kCorrupt) << missing.ToString();
+  const std::span<const uint64_t> fewer(s.morton.data(), s.morton.size() - 1);
+  EXPECT_EQ(BlockColorDecoder::Open(v3, s.colors.size(), fewer).status().code(), StatusCode::kCorrupt);
+  EXPECT_FALSE(SerializeBlocksAsVersion(s.colors, {}, BlockLayout::kVariableRate, 3, fewer).ok());
+}
+
+TEST(BlockStreamV3, CorruptStreamsAreErrorsNotCrashes) {
+  const Surface s = WavySurface(60, 3);
+  const auto stream = *SerializeBlocks(s.colors, *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 10.0), BlockLayout::kVariableRate, s.morton);
+  for (size_t len = 0; len < stream.size(); len += 1 + stream.size() / 200) {
+    EXPECT_FALSE(BlockColorDecoder::Open(std::span(stream).first(len), s.colors.size(), s.morton).ok()) << len;
+  }
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 300; ++trial) {
+    auto bad = stream;
+    bad[rng() % bad.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    auto decoder = BlockColorDecoder::Open(bad, s.colors.size(), s.morton);
+    if (decoder.ok()) {
+      for (uint64_t i = 0; i < decoder->size(); i += 97) (void)decoder->At(i);  // in bounds, whatever it holds
+    }
+  }
+}
+
+// Leaf-mode sections (Morton codes given) are version 3, mipmap ones (none) version 2; both decode.
+TEST(BlockStreamV3, ColorSectionsPickTheirVersionByTheMortonCodes) {
+  const Surface s = WavySurface(50, 5);
+  for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+    auto leaf = EncodeColors(s.colors, {codec, 36.0}, s.morton);
+    auto mip = EncodeColors(s.colors, {codec, 36.0});
+    ASSERT_TRUE(leaf.ok() && mip.ok());
+    EXPECT_EQ(leaf->bytes[1], 3);
+    EXPECT_EQ(mip->bytes[1], 2);
+    EXPECT_GE(leaf->psnr.y, 36.0);
+    EXPECT_EQ(*DecodeColors(leaf->bytes, s.colors.size(), s.morton), *DecodeColors(mip->bytes, s.colors.size()));
+  }
+}
+
+// The fuzz seeds of version 3 hold the version 2 seeds' decoded colors, re-encoded exactly, for
+// voxels 0..count-1 in Morton order (the dense block the color fuzz targets give: color_fuzz_input.h).
+TEST(BlockStreamV3, FuzzSeedsHoldTheVersionTwoSeedsColors) {
+  for (const char* name : {"color_vbr/vbrquality34coderzstd", "color_fixed3/fixed3quality34"}) {
+    const std::filesystem::path base = std::filesystem::path(POINTDAG_SOURCE_DIR) / "fuzz/seeds" / name;
+    const auto seed = [&](const char* suffix) { return testing::ReadBytes(base.string() + suffix); };
+    const std::vector<uint8_t> v2 = seed("_v2.bin");
+    ASSERT_GT(v2.size(), 4u) << name;
+    const uint64_t count = uint64_t{v2[0]} | uint64_t{v2[1]} << 8 | uint64_t{v2[2]} << 16;
+    std::vector<uint64_t> morton(count);
+    for (uint64_t i = 0; i < count; ++i) morton[i] = i;
+    auto old = BlockColorDecoder::Open(std::span(v2).subspan(3), count);
+    ASSERT_TRUE(old.ok()) << old.status().ToString();
+    const std::vector<Rgb8> colors = old->DecodeAll();
+    const std::vector<uint8_t> v3 = seed("_v3.bin");
+    ASSERT_GT(v3.size(), 4u) << name;
+    EXPECT_EQ(v3[3], 3);
+    auto spatial = BlockColorDecoder::Open(std::span(v3).subspan(3), count, morton);
+    ASSERT_TRUE(spatial.ok()) << spatial.status().ToString();
+    EXPECT_EQ(spatial->DecodeAll(), colors) << name;
+  }
+}
+
+// The compressed size of a fixed scan at a fixed setting, as color_test's CompressedSizesAreStable
+// (version 2 there: 8990 and 9157 bytes). A change here must be deliberate.
+TEST(BlockStreamV3, CompressedSizesAreStable) {
+  SKIP_WITHOUT_DATA();
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  auto scan = EncodeScan(testing::DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  ASSERT_TRUE(scan.ok());
+  const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
+  const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7888u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7817u);
+}
+
+}  // namespace
+}  // namespace pointdag
