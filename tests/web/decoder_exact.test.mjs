@@ -105,3 +105,29 @@ describe('tiles decoded in JavaScript and WebAssembly equal pointdag decode', ()
     });
   }
 });
+
+// A whole-scan file in leaf mode (`pointdag encode --quality`): its VBR colors are block stream
+// version 3, whose weights' contexts come from the voxels' decoded neighbours.
+describe('leaf-mode files decoded in JavaScript and WebAssembly equal pointdag decode', () => {
+  let wasm, scratch;
+  before(async () => {
+    requireFile(config.cli, 'the pointdag CLI (build it: scripts/build)');
+    wasm = await loadWasm();
+    scratch = mkdtempSync(join(tmpdir(), 'pointdag-web-leaf-'));
+  });
+  after(() => {
+    if (scratch) rmSync(scratch, { recursive: true, force: true });
+  });
+
+  for (const [codec, quality] of [['vbr', '38'], ['fixed3', '34']]) {
+    test(`autzen at 4 ft, ${codec} at ${quality} dB`, async (t) => {
+      const file = join(scratch, `autzen-${codec}.pdag`);
+      execFileSync(config.cli, ['encode', scan('autzen_trim_pdrf3_rgb.las'), '--voxel', '1.2192', '--color-codec', codec,
+        '--quality', quality, '-o', file], { stdio: ['ignore', 'ignore', 'pipe'], env: { ...process.env, POINTDAG_DEVICE: 'cpu' } });
+      const bytes = new Uint8Array(readFileSync(file));
+      const want = decodeWithCli(bytes, scratch);
+      await t.test('JavaScript', () => assertSameVoxels(decodePdag(bytes), want, `${codec} (JavaScript)`));
+      await t.test('WebAssembly', { skip: !wasm && WASM_SKIPPED }, () => assertSameVoxels(wasm.decode(bytes), want, `${codec} (WebAssembly)`));
+    });
+  }
+});

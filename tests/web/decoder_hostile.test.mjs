@@ -224,18 +224,33 @@ describe('geometry stream versions', () => {
   });
 });
 
-// Block color stream version 1 (channel differences) still decodes: the version 2 seeds hold the
-// version 1 seeds' decoded colors, re-encoded exactly (tests/codec/color_test.cc checks C++ alike).
+// Block color stream versions 1 (channel differences) and 2 still decode: the version 2 seeds hold
+// the version 1 seeds' decoded colors, re-encoded exactly, the version 3 seeds those of version 2
+// for the voxels 0..count-1 in Morton order (tests/codec/color_test.cc and block_stream_v3_test.cc
+// check C++ alike); version 3 needs the voxels.
 describe('color stream versions', () => {
-  test('vbr and fixed3 version 1 and version 2 decode to the same colors', () => {
+  test('vbr and fixed3 versions 1, 2 and 3 decode to the same colors', () => {
     const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/${name}`, import.meta.url)));
     for (const name of ['color_vbr/vbrquality34coderzstd', 'color_fixed3/fixed3quality34']) {
       const v1 = seed(`${name}.bin`);
       const v2 = seed(`${name}_v2.bin`);
+      const v3 = seed(`${name}_v3.bin`);
       const count = v1[0] | (v1[1] << 8) | (v1[2] << 16);
       assert.equal(v1[3], 1);
       assert.equal(v2[3], 2);
-      assert.deepEqual(decodeBlockColors(v2.subarray(3), count), decodeBlockColors(v1.subarray(3), count));
+      assert.equal(v3[3], 3);
+      const colors = decodeBlockColors(v1.subarray(3), count);
+      assert.deepEqual(decodeBlockColors(v2.subarray(3), count), colors);
+      const coords = new Uint16Array(3 * count);  // cell of Morton code i: x, y, z from bits 3k+2, 3k+1, 3k
+      for (let i = 0; i < count; ++i) {
+        for (let bit = 0; 3 * bit < 16; ++bit) {
+          coords[3 * i] |= ((i >> (3 * bit + 2)) & 1) << bit;
+          coords[3 * i + 1] |= ((i >> (3 * bit + 1)) & 1) << bit;
+          coords[3 * i + 2] |= ((i >> (3 * bit)) & 1) << bit;
+        }
+      }
+      assert.deepEqual(decodeBlockColors(v3.subarray(3), count, coords), colors);
+      assert.throws(() => decodeBlockColors(v3.subarray(3), count), PdagError);
     }
   });
 });

@@ -8,12 +8,13 @@
 // Contexts per weight width (kSpatialWeightContexts).
 export const SPATIAL_WEIGHT_CONTEXTS = 33;
 
-// The 26 neighbour offsets with their weights.
+// The neighbour offsets that can precede a voxel in Morton order, with their weights: the code
+// grows with each coordinate, so the 7 offsets with no negative component never do.
 const OFFSETS = [];
 for (let dx = -1; dx <= 1; ++dx) {
   for (let dy = -1; dy <= 1; ++dy) {
     for (let dz = -1; dz <= 1; ++dz) {
-      if (dx || dy || dz) OFFSETS.push([dx, dy, dz, 8 >> ((dx !== 0) + (dy !== 0) + (dz !== 0))]);
+      if (dx < 0 || dy < 0 || dz < 0) OFFSETS.push(dx, dy, dz, 8 >> ((dx !== 0) + (dy !== 0) + (dz !== 0)));
     }
   }
 }
@@ -55,14 +56,15 @@ export class WeightContexts {
     const len2 = sr * sr + sg * sg + sb * sb;
     const x = this.coords[3 * i], y = this.coords[3 * i + 1], z = this.coords[3 * i + 2];
     let sum = 0, total = 0;
-    for (const [dx, dy, dz, weight] of OFFSETS) {
-      if (x + dx < 0 || y + dy < 0 || z + dz < 0) continue;
-      const j = this.find(x + dx, y + dy, z + dz);
+    for (let k = 0; k < OFFSETS.length; k += 4) {
+      const nx = x + OFFSETS[k], ny = y + OFFSETS[k + 1], nz = z + OFFSETS[k + 2];
+      if (nx < 0 || ny < 0 || nz < 0) continue;
+      const j = this.find(nx, ny, nz);
       if (j < 0 || j >= i) continue;  // absent, or not decoded yet
       const dot = (decoded[3 * j] - ar) * sr + (decoded[3 * j + 1] - ag) * sg + (decoded[3 * j + 2] - ab) * sb;
       const step = dot <= 0 || len2 === 0 ? 0 : Math.min(m, Math.floor((2 * dot * m + len2) / (2 * len2)));
-      sum += weight * step;
-      total += weight;
+      sum += OFFSETS[k + 3] * step;
+      total += OFFSETS[k + 3];
     }
     if (total === 0) return 16 + prev;
     return Math.floor((2 * sum + total) / (2 * total));
