@@ -5,7 +5,6 @@
 #include <bit>
 #include <memory>
 
-#include "pointdag/color/morton_table.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/voxelize/morton.h"
@@ -18,6 +17,35 @@ constexpr uint8_t kModePrevious = 0, kModeNeighbours = 1;
 // Each color costs at least three binary decisions of p <= 4095/4096 (0.00106 bits): 7570 a byte.
 constexpr uint64_t kMaxColorsPerByte = 8192;
 constexpr int kMaxGammaLength = 9;  // zigzag residuals of -128..127 are 1..256
+
+// Open addressing from a Morton code to its color index; keys are read back from the codes
+// themselves, so a slot is one index (+1, 0 = empty).
+class MortonTable {
+ public:
+  explicit MortonTable(std::span<const uint64_t> morton) : morton_(morton) {
+    const size_t capacity = std::bit_ceil(std::max<size_t>(16, 2 * morton.size()));
+    slots_.assign(capacity, 0);
+    mask_ = capacity - 1;
+    for (size_t i = 0; i < morton.size(); ++i) {
+      size_t s = Hash(morton[i]) & mask_;
+      while (slots_[s] != 0) s = (s + 1) & mask_;
+      slots_[s] = static_cast<uint32_t>(i + 1);
+    }
+  }
+  // The index of `code`, or -1.
+  int64_t Find(uint64_t code) const {
+    for (size_t s = Hash(code) & mask_; slots_[s] != 0; s = (s + 1) & mask_) {
+      if (morton_[slots_[s] - 1] == code) return slots_[s] - 1;
+    }
+    return -1;
+  }
+
+ private:
+  static size_t Hash(uint64_t code) { return static_cast<size_t>((code * 0x9E3779B97F4A7C15ull) >> 20); }
+  std::span<const uint64_t> morton_;
+  std::vector<uint32_t> slots_;
+  size_t mask_ = 0;
+};
 
 struct Offset {
   int dx, dy, dz, d2;  // d2: squared distance

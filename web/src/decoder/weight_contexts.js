@@ -1,9 +1,9 @@
 // Spatial contexts of the block color stream's weights (version 3, leaf mode), computed as
-// codec/pointdag/color/weight_context.cc WeightContexts::Of computes them: the decoded colors of the
-// voxel's face, edge and corner neighbours that precede it in Morton order, projected onto the
-// current block's segment A -> B and rounded to its weight steps, their mean weighted 4 / 2 / 1 for
-// faces / edges / corners; 16 + the previous weight without such neighbours. Neighbours are found
-// by cell in a hash table (the C++ one finds them by Morton code: the same voxels).
+// codec/pointdag/color/weight_context.cc WeightContexts::Of computes them: the mean of the decoded
+// colors of the voxel's face, edge and corner neighbours that precede it in Morton order (weighted
+// 4 / 2 / 1 for faces / edges / corners), projected onto the current block's segment A -> B and
+// rounded to its weight steps; 16 + the previous weight without such neighbours. Neighbours are
+// found by cell in a hash table (the C++ one finds them through 4x4x4 bricks: the same voxels).
 
 // Contexts per weight width (kSpatialWeightContexts).
 export const SPATIAL_WEIGHT_CONTEXTS = 33;
@@ -51,22 +51,25 @@ export class WeightContexts {
 
   // The context of color i's weight; `decoded` holds the colors before i (RGB per color).
   of(i, decoded, ar, ag, ab, br, bg, bb, bits, prev) {
-    const m = (1 << bits) - 1;
-    const sr = br - ar, sg = bg - ag, sb = bb - ab;
-    const len2 = sr * sr + sg * sg + sb * sb;
     const x = this.coords[3 * i], y = this.coords[3 * i + 1], z = this.coords[3 * i + 2];
-    let sum = 0, total = 0;
+    let r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
     for (let k = 0; k < OFFSETS.length; k += 4) {
       const nx = x + OFFSETS[k], ny = y + OFFSETS[k + 1], nz = z + OFFSETS[k + 2];
       if (nx < 0 || ny < 0 || nz < 0) continue;
       const j = this.find(nx, ny, nz);
       if (j < 0 || j >= i) continue;  // absent, or not decoded yet
-      const dot = (decoded[3 * j] - ar) * sr + (decoded[3 * j + 1] - ag) * sg + (decoded[3 * j + 2] - ab) * sb;
-      const step = dot <= 0 || len2 === 0 ? 0 : Math.min(m, Math.floor((2 * dot * m + len2) / (2 * len2)));
-      sum += OFFSETS[k + 3] * step;
-      total += OFFSETS[k + 3];
+      const weight = OFFSETS[k + 3];
+      r += weight * decoded[3 * j];
+      g += weight * decoded[3 * j + 1];
+      b += weight * decoded[3 * j + 2];
+      total += weight;
     }
     if (total === 0) return 16 + prev;
-    return Math.floor((2 * sum + total) / (2 * total));
+    const m = (1 << bits) - 1;
+    const sr = br - ar, sg = bg - ag, sb = bb - ab;
+    const len2 = sr * sr + sg * sg + sb * sb;
+    const dot = (r - total * ar) * sr + (g - total * ag) * sg + (b - total * ab) * sb;
+    if (dot <= 0 || len2 === 0) return 0;
+    return Math.min(m, Math.floor((2 * dot * m + total * len2) / (2 * total * len2)));
   }
 }
