@@ -1,6 +1,7 @@
 #include "pointdag/color/weight_context.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstddef>
 
@@ -26,6 +27,38 @@ constexpr int BrickBit(int x, int y, int z) {
   return spread(x) << 2 | spread(y) << 1 | spread(z);
 }
 
+// A neighbour that may precede a voxel, seen from the voxel's cell in its brick: the brick it lies
+// in (slot of WeightContexts::near_), its bit there, and its weight (faces 4, edges 2, corners 1).
+struct Neighbour {
+  uint8_t slot, bit, weight;
+};
+constexpr int kMayPrecede = 19;  // of the 26 offsets, those with a negative component (the code grows with each coordinate)
+
+// Per cell of a brick (its bit), its neighbours that may precede it; those later in its own brick
+// are left out (weight 0).
+constexpr auto MakeNeighbourTable() {
+  std::array<std::array<Neighbour, kMayPrecede>, 64> table{};
+  for (int own = 0; own < 64; ++own) {
+    const int lx = (own >> 2 & 1) | (own >> 4 & 2), ly = (own >> 1 & 1) | (own >> 3 & 2), lz = (own & 1) | (own >> 2 & 2);
+    int n = 0;
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          if (dx >= 0 && dy >= 0 && dz >= 0) continue;
+          const int nx = lx + dx, ny = ly + dy, nz = lz + dz;
+          const int slot = ((nx >> 2) + 1) * 9 + ((ny >> 2) + 1) * 3 + ((nz >> 2) + 1);  // >> 2: -1, 0 or 1
+          const int bit = BrickBit(nx & 3, ny & 3, nz & 3);
+          const bool later = slot == 13 && bit > own;
+          table[own][n++] = {static_cast<uint8_t>(slot), static_cast<uint8_t>(bit),
+                             static_cast<uint8_t>(later ? 0 : 8 >> ((dx != 0) + (dy != 0) + (dz != 0)))};
+        }
+      }
+    }
+  }
+  return table;
+}
+constexpr auto kNeighbours = MakeNeighbourTable();
+
 }  // namespace
 
 WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()) {
@@ -41,14 +74,21 @@ void WeightContexts::EnterBrick(size_t k) {
   current_ = k;
   const uint64_t code = bricks_[k].code;
   for (int dx = -1; dx <= 1; ++dx) {
+    uint64_t cx = code;
+    const bool x_ok = Moved(code, 0, dx, cx);
     for (int dy = -1; dy <= 1; ++dy) {
+      uint64_t cy = cx;
+      const bool y_ok = x_ok && Moved(cx, 1, dy, cy);
       for (int dz = -1; dz <= 1; ++dz) {
         Brick& near = near_[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
         near = {0, 0, 0};
-        uint64_t c = code;
-        if (!Moved(c, 0, dx, c) || !Moved(c, 1, dy, c) || !Moved(c, 2, dz, c) || c > code) continue;  // after this brick
-        // Bricks are sorted by code: the neighbour, if any, is at or before this one.
-        const auto first = bricks_.begin(), last = bricks_.begin() + static_cast<ptrdiff_t>(k) + 1;
+        uint64_t c = cy;
+        if (!y_ok || !Moved(cy, 2, dz, c) || c > code) continue;  // outside, or after this brick
+        // Bricks are sorted by code: gallop back from this one (neighbours are mostly near), then bisect.
+        size_t hi = k + 1, step = 1;
+        while (step <= hi && bricks_[hi - step].code > c) hi -= step, step *= 2;
+        const auto first = bricks_.begin() + static_cast<ptrdiff_t>(step <= hi ? hi - step : 0);
+        const auto last = bricks_.begin() + static_cast<ptrdiff_t>(hi);
         const auto it = std::lower_bound(first, last, c, [](const Brick& b, uint64_t v) { return b.code < v; });
         if (it != last && it->code == c) near = *it;
       }
@@ -61,26 +101,15 @@ uint32_t WeightContexts::Of(uint64_t i, const Endpoints& ends, int bits, uint32_
   while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
   if (k != current_) EnterBrick(k);
 
-  const int own = static_cast<int>(morton_[i] & 63);
-  const int lx = (own >> 2 & 1) | (own >> 4 & 2), ly = (own >> 1 & 1) | (own >> 3 & 2), lz = (own & 1) | (own >> 2 & 2);
   int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        if (dx >= 0 && dy >= 0 && dz >= 0) continue;  // itself, or after it (the code grows with each coordinate)
-        const int nx = lx + dx, ny = ly + dy, nz = lz + dz;
-        const Brick& near = near_[((nx >> 2) + 1) * 9 + ((ny >> 2) + 1) * 3 + ((nz >> 2) + 1)];  // >> 2: -1, 0 or 1
-        const int bit = BrickBit(nx & 3, ny & 3, nz & 3);
-        if (!(near.mask >> bit & 1)) continue;
-        if (&near == &near_[13] && bit > own) continue;  // later in this brick
-        const Rgb8 c = decoded_[near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << bit) - 1)))];
-        const int weight = 8 >> ((dx != 0) + (dy != 0) + (dz != 0));  // faces 4, edges 2, corners 1
-        r += weight * c.r;
-        g += weight * c.g;
-        b += weight * c.b;
-        total += weight;
-      }
-    }
+  for (const Neighbour& n : kNeighbours[morton_[i] & 63]) {
+    const Brick& near = near_[n.slot];
+    if (n.weight == 0 || !(near.mask >> n.bit & 1)) continue;
+    const Rgb8 c = decoded_[near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1)))];
+    r += n.weight * c.r;
+    g += n.weight * c.g;
+    b += n.weight * c.b;
+    total += n.weight;
   }
   if (total == 0) return 16 + prev;
   // Their mean's position on the segment A -> B in weight steps, rounded, clamped to 0..m (0 where
