@@ -234,7 +234,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
         extra = ((around.outer >> c) & 1u) * 2 + (diagonal ? 1u : 0u);
       }
       auto& model = models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra];
-      bit = mix ? mix->Bit(io, model, c, m, lv.parent[i], lower, ones > 0, (truth >> c) & 1)
+      bit = mix ? mix->Bit(io, model, c, m, lv.parent[i], lower, ones > 0, exists, (truth >> c) & 1)
                 : io.Bit(model, (truth >> c) & 1);
     }
     m |= static_cast<unsigned>(bit) << c;
@@ -317,7 +317,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
   const int levels = depth - 2;
   const bool edges = version >= 2;
   auto models = std::make_unique<SpatialModels>();
-  std::unique_ptr<MaskMixer> mix = version >= 3 ? std::make_unique<MaskMixer>() : nullptr;
+  std::unique_ptr<MaskMixer> mix = version >= 3 ? std::make_unique<MaskMixer>(version >= 4) : nullptr;
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
     if (level < levels) return a.masks[level][id];
     if (level > levels) return static_cast<uint8_t>(slots[id >> 3] >> (8 * (id & 7)));

@@ -118,7 +118,7 @@ function edge(nbr, none, o, d1, d2) {
 }
 
 // The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied. `v2`: version
-// 2's contexts; `edges`: scratch; `mix`: version 3's mixer (null before).
+// 2's contexts; `edges`: scratch; `mix`: version 3's and 4's mixer (null before).
 function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
   const o = 6 * i;
   let exists = 0;
@@ -143,7 +143,7 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
       let extra = 0;
       if (v2) extra = ((around >> c) & 1) * 2 + (((around >> (8 + c)) & 1) | ((m & DIAGONAL_SELF[c]) !== 0));
       const model = base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra;
-      bit = mix ? mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0) : rc.youngBit(young, age, model);
+      bit = mix ? mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0, exists) : rc.youngBit(young, age, model);
     }
     m |= bit << c;
     if (ones < most) ones += bit;
@@ -240,7 +240,7 @@ export function decodeSpatial(rc, depth, counts, version) {
   const levels = depth - 2;
   const v2 = version >= 2;
   const edges = new Int32Array(12);
-  const mix = version >= 3 ? new MaskMixer() : null;
+  const mix = version >= 3 ? new MaskMixer(version >= 4) : null;
   const young = newModels(CLASSES * MASK_CONTEXTS);
   const age = new Uint8Array(CLASSES * MASK_CONTEXTS);
   const p = newModels(REF_BASE + CLASSES * GAMMA_MODELS);
