@@ -30,11 +30,20 @@ function newLevel(n, positions) {
 // 0 = no cell spanning it coded yet, 1 = the last one had no children there, 2 = it had.
 const LOW_HALF = [0x0f, 0x33, 0x55];
 function planeStates(last, pos, i, out) {
-  for (let c = 0; c < 8; ++c) {
-    let st = 0;
-    for (let axis = 0; axis < 3; ++axis) st = st * 3 + last[axis][2 * pos[3 * i + axis] + ((c >> (2 - axis)) & 1)];
-    out[c] = st;
-  }
+  const x = 2 * pos[3 * i];
+  const y = 2 * pos[3 * i + 1];
+  const z = 2 * pos[3 * i + 2];
+  const x0 = 9 * last[0][x], x1 = 9 * last[0][x + 1];
+  const y0 = 3 * last[1][y], y1 = 3 * last[1][y + 1];
+  const z0 = last[2][z], z1 = last[2][z + 1];
+  out[0] = x0 + y0 + z0;
+  out[1] = x0 + y0 + z1;
+  out[2] = x0 + y1 + z0;
+  out[3] = x0 + y1 + z1;
+  out[4] = x1 + y0 + z0;
+  out[5] = x1 + y0 + z1;
+  out[6] = x1 + y1 + z0;
+  out[7] = x1 + y1 + z1;
 }
 function planeRecord(last, pos, i, mask) {
   for (let axis = 0; axis < 3; ++axis) {
