@@ -105,9 +105,10 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
   }
 }
 
-// Versions 1 (coder 2 without edge neighbours) and 2 (without the mixer) still decode: the fuzz
-// seeds of tiny at 40 ft in all three versions hold one DAG; writers write version 3 unless asked.
-TEST(DagStream, SpatialVersions1And2StillDecode) {
+// Versions 1 (coder 2 without edge neighbours), 2 (without the mixer) and 3 (without the mixer's
+// sides model) still decode: the fuzz seeds of tiny at 40 ft in all four versions hold one DAG, and
+// writers write version 4.
+TEST(DagStream, SpatialVersions1To3StillDecode) {
   const auto read = [](const std::string& name) {
     std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
     return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
@@ -116,15 +117,17 @@ TEST(DagStream, SpatialVersions1And2StillDecode) {
     const auto v1 = read(mode + "_spatial.bin");
     const auto v2 = read(mode + "_spatial_v2.bin");
     const auto v3 = read(mode + "_spatial_v3.bin");
+    const auto v4 = read(mode + "_spatial_v4.bin");
     ASSERT_EQ(v1.at(0), 1);
     ASSERT_EQ(v2.at(0), 2);
     ASSERT_EQ(v3.at(0), 3);
+    ASSERT_EQ(v4.at(0), 4);
     const Svdag dag = DecodeDag(v1).value();
     EXPECT_EQ(DecodeDag(v2).value(), dag);
     EXPECT_EQ(DecodeDag(v3).value(), dag);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v3);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 2).value(), v2);  // older versions stay writable
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 1).value(), v1);
+    EXPECT_EQ(DecodeDag(v4).value(), dag);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 3).value(), v3);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), v4);
     EXPECT_LT(v2.size(), v1.size());
     EXPECT_LT(v3.size(), v2.size());
   }

@@ -205,21 +205,24 @@ describe('hostile tiles', () => {
   });
 });
 
-// Geometry stream versions 1 (coder 2 without edge neighbours) and 2 (without the mixer) still
-// decode: the fuzz seeds of tiny at 40 ft in all three versions hold one DAG
-// (tests/codec/dag_stream_test.cc checks the same in C++).
+// Geometry stream versions 1 (coder 2 without edge neighbours), 2 (without the mixer) and 3 (without
+// the mixer's sides model) still decode: the fuzz seeds of tiny at 40 ft in all four versions hold
+// one DAG (tests/codec/dag_stream_test.cc checks the same in C++).
 describe('geometry stream versions', () => {
-  test('coder 2 versions 1, 2 and 3 decode to the same DAG', () => {
+  test('coder 2 versions 1, 2, 3 and 4 decode to the same DAG', () => {
     const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/dag_stream/${name}`, import.meta.url)));
     for (const mode of ['leaves', 'mipmap']) {
       const v1 = seed(`${mode}_spatial.bin`);
       const v2 = seed(`${mode}_spatial_v2.bin`);
-      assert.equal(v1[0], 1);
       const v3 = seed(`${mode}_spatial_v3.bin`);
+      const v4 = seed(`${mode}_spatial_v4.bin`);
+      assert.equal(v1[0], 1);
       assert.equal(v2[0], 2);
       assert.equal(v3[0], 3);
+      assert.equal(v4[0], 4);
       assert.deepEqual(decodeDag(v2), decodeDag(v1));
       assert.deepEqual(decodeDag(v3), decodeDag(v1));
+      assert.deepEqual(decodeDag(v4), decodeDag(v1));
     }
   });
 });

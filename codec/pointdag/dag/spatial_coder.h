@@ -24,7 +24,8 @@ namespace pointdag {
 constexpr uint64_t kMaxSpatialNodesPerByte = 820;
 
 // `version`: the geometry stream's (PDAG_FORMAT §2.2): 2 adds edge and corner neighbours to the
-// mask contexts, 1 does without, 3 mixes version 2's model with two more (mask_mixer.h).
+// mask contexts, 1 does without, 3 mixes version 2's model with two more (mask_mixer.h), 4 with
+// three more.
 StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth, int version);
 
 // `counts`: nodes per internal level, then bricks (the stream's level table, already checked).

@@ -1,7 +1,9 @@
 // Version 3's mask bits (proto/PDAG_FORMAT.md §2.2), as codec/pointdag/dag/mask_mixer.h mixes them,
 // bit for bit: the version 2 neighbour model's prediction mixed with those of (class, mask so far)
 // (mask so far) and (child, parent's mask, lower neighbours) by integer logistic mixing, weights
-// learnt per (child, any bit set so far); one set for all classes, fresh per stream.
+// learnt per (child, any bit set so far); one set for all classes, fresh per stream. Version 4
+// mixes two more: (mask so far, which of the node's six face neighbours exist) and (mask so far,
+// the child's plane memory state).
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
 // P(bit = 1) in 1/4096 at d = −2048, −1920, .., 2048 (1/256 nats).
@@ -30,29 +32,42 @@ const MAX_WEIGHT = 1 << 22;
 const clampWeight = (w) => (w < -MAX_WEIGHT ? -MAX_WEIGHT : w > MAX_WEIGHT ? MAX_WEIGHT : w);
 
 export class MaskMixer {
-  constructor() {
+  // `more`: version 4's two models; without them their inputs stay 0 (version 3).
+  constructor(more) {
     this.tree = newModels(256);
     this.treeAge = new Uint8Array(256);
     this.par = newModels(8 * 256 * 8);
     this.parAge = new Uint8Array(8 * 256 * 8);
-    this.w = new Int32Array(8 * 2 * 4);
-    for (let k = 0; k < this.w.length; k += 4) {
+    this.more = more;
+    this.sides = newModels(more ? 256 * 64 : 0);
+    this.sidesAge = new Uint8Array(more ? 256 * 64 : 0);
+    this.planes = newModels(more ? 256 * 27 : 0);
+    this.planesAge = new Uint8Array(more ? 256 * 27 : 0);
+    this.w = new Int32Array(8 * 2 * 6);
+    for (let k = 0; k < this.w.length; k += 6) {
       this.w[k] = 65536;
       this.w[k + 1] = 19661;
       this.w[k + 2] = 19661;
+      this.w[k + 4] = 19661;
+      this.w[k + 5] = 19661;
     }
   }
-  // Decodes child c's bit; `young`/`age`/`m`: the version 2 model.
-  bit(rc, young, age, m, c, soFar, parent, lower, ones) {
+  // Decodes child c's bit; `young`/`age`/`m`: the version 2 model; `faces`: bits 0..2 the node's
+  // lower x, y, z face neighbours exist, 3..5 the upper; `plane`: the plane memory's state (0..26).
+  bit(rc, young, age, m, c, soFar, parent, lower, ones, faces, plane) {
     const t = (1 << c) | soFar;
     const q = (c * 256 + parent) * 8 + lower;
-    const wi = (c * 2 + (ones ? 1 : 0)) * 4;
+    const f = (t << 6) | faces;
+    const g = t * 27 + plane;
+    const wi = (c * 2 + (ones ? 1 : 0)) * 6;
     const w = this.w;
     const s0 = STRETCH[4096 - youngP0(young, m)];
     const s1 = STRETCH[4096 - youngP0(this.tree, t)];
     const s2 = STRETCH[4096 - youngP0(this.par, q)];
+    const s3 = this.more ? STRETCH[4096 - youngP0(this.sides, f)] : 0;
+    const s4 = this.more ? STRETCH[4096 - youngP0(this.planes, g)] : 0;
     // Each product is below 2^33 and their sum below 2^36: exact in doubles; floor = the C++ shift.
-    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * BIAS;
+    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * BIAS + w[wi + 4] * s3 + w[wi + 5] * s4;
     let d = Math.floor(dot / 65536);
     if (d < -2047) d = -2047;
     else if (d > 2047) d = 2047;
@@ -65,9 +80,15 @@ export class MaskMixer {
     w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
     w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
     w[wi + 3] = clampWeight(w[wi + 3] + ((BIAS * err) >> 11));
+    w[wi + 4] = clampWeight(w[wi + 4] + ((s3 * err) >> 11));
+    w[wi + 5] = clampWeight(w[wi + 5] + ((s4 * err) >> 11));
     youngUpdate(young, age, m, bit);
     youngUpdate(this.tree, this.treeAge, t, bit);
     youngUpdate(this.par, this.parAge, q, bit);
+    if (this.more) {
+      youngUpdate(this.sides, this.sidesAge, f, bit);
+      youngUpdate(this.planes, this.planesAge, g, bit);
+    }
     return bit;
   }
 }

@@ -18,11 +18,39 @@ const POP = Uint8Array.from({ length: 256 }, (_, i) => {
 });
 const rank = (mask, bit) => POP[mask & ((1 << bit) - 1)];
 
-// Cells 0..n−1 and a sentinel row n (no neighbours, mask 0) that version 2's lookups go through.
-function newLevel(n) {
+// Cells 0..n−1 and a sentinel row n (no neighbours, mask 0) that version 2's lookups go through;
+// `positions`: x, y, z per cell (version 4's plane memory).
+function newLevel(n, positions) {
   const nbr = new Int32Array(6 * (n + 1));
   nbr.fill(-1, 6 * n);
-  return { n, id: new Uint32Array(n), first: new Uint8Array(n), parent: new Uint8Array(n), nbr, mask: new Uint8Array(n + 1), kids: new Uint32Array(n) };
+  return { n, id: new Uint32Array(n), first: new Uint8Array(n), parent: new Uint8Array(n), nbr, mask: new Uint8Array(n + 1), kids: new Uint32Array(n), pos: new Uint32Array(positions ? 3 * n : 0) };
+}
+
+// Version 4's plane memory, as spatial_coder.cc's PlaneMemory: per axis and plane of the next level,
+// 0 = no cell spanning it coded yet, 1 = the last one had no children there, 2 = it had.
+const LOW_HALF = [0x0f, 0x33, 0x55];
+function planeStates(last, pos, i, out) {
+  const x = 2 * pos[3 * i];
+  const y = 2 * pos[3 * i + 1];
+  const z = 2 * pos[3 * i + 2];
+  const x0 = 9 * last[0][x], x1 = 9 * last[0][x + 1];
+  const y0 = 3 * last[1][y], y1 = 3 * last[1][y + 1];
+  const z0 = last[2][z], z1 = last[2][z + 1];
+  out[0] = x0 + y0 + z0;
+  out[1] = x0 + y0 + z1;
+  out[2] = x0 + y1 + z0;
+  out[3] = x0 + y1 + z1;
+  out[4] = x1 + y0 + z0;
+  out[5] = x1 + y0 + z1;
+  out[6] = x1 + y1 + z0;
+  out[7] = x1 + y1 + z1;
+}
+function planeRecord(last, pos, i, mask) {
+  for (let axis = 0; axis < 3; ++axis) {
+    const p = 2 * pos[3 * i + axis];
+    last[axis][p] = mask & LOW_HALF[axis] ? 2 : 1;
+    last[axis][p + 1] = mask & ~LOW_HALF[axis] & 0xff ? 2 : 1;
+  }
 }
 
 // The context's parts as tables, as spatial_coder.cc builds them: SIDES[exists * 8 + c] (exists =
@@ -118,8 +146,9 @@ function edge(nbr, none, o, d1, d2) {
 }
 
 // The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied. `v2`: version
-// 2's contexts; `edges`: scratch; `mix`: version 3's mixer (null before).
-function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
+// 2's contexts; `edges`: scratch; `mix`: version 3's and 4's mixer (null before); `planes`: the
+// plane memory's state per child (version 4).
+function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes) {
   const o = 6 * i;
   let exists = 0;
   let facing = 0;
@@ -143,7 +172,7 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
       let extra = 0;
       if (v2) extra = ((around >> c) & 1) * 2 + (((around >> (8 + c)) & 1) | ((m & DIAGONAL_SELF[c]) !== 0));
       const model = base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra;
-      bit = mix ? mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0) : rc.youngBit(young, age, model);
+      bit = mix ? mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0, exists, planes[c]) : rc.youngBit(young, age, model);
     }
     m |= bit << c;
     if (ones < most) ones += bit;
@@ -152,7 +181,7 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix) {
 }
 
 // The next level's cells: children of the expanded cells, with their face neighbours.
-function expand(cur, level, levels, kids) {
+function expand(cur, level, levels, kids, positions) {
   const base = new Int32Array(cur.n).fill(-1);
   let total = 0;
   for (let i = 0; i < cur.n; ++i) {
@@ -161,7 +190,7 @@ function expand(cur, level, levels, kids) {
       total += POP[cur.mask[i]];
     }
   }
-  const next = newLevel(total);
+  const next = newLevel(total, positions);
   let j = 0;
   let fresh = 0;
   for (let i = 0; i < cur.n; ++i) {
@@ -186,6 +215,11 @@ function expand(cur, level, levels, kids) {
       next.id[j] = id;
       next.first[j] = isFirst;
       next.parent[j] = mask;
+      if (positions) {
+        next.pos[3 * j] = 2 * cur.pos[3 * i] + ((c >> 2) & 1);
+        next.pos[3 * j + 1] = 2 * cur.pos[3 * i + 1] + ((c >> 1) & 1);
+        next.pos[3 * j + 2] = 2 * cur.pos[3 * i + 2] + (c & 1);
+      }
       for (let d = 0; d < 6; ++d) {
         const bit = 4 >> (d >> 1);
         const inside = (d & 1) ? !(c & bit) : (c & bit) !== 0;
@@ -240,7 +274,10 @@ export function decodeSpatial(rc, depth, counts, version) {
   const levels = depth - 2;
   const v2 = version >= 2;
   const edges = new Int32Array(12);
-  const mix = version >= 3 ? new MaskMixer() : null;
+  const mix = version >= 3 ? new MaskMixer(version >= 4) : null;
+  const planes = version >= 4;
+  const last = [null, null, null];
+  const states = new Uint8Array(8);
   const young = newModels(CLASSES * MASK_CONTEXTS);
   const age = new Uint8Array(CLASSES * MASK_CONTEXTS);
   const p = newModels(REF_BASE + CLASSES * GAMMA_MODELS);
@@ -249,7 +286,7 @@ export function decodeSpatial(rc, depth, counts, version) {
   const children = [];
   let slotLo = new Uint32Array(levels === 0 ? 1 : 0);
   let slotHi = new Uint32Array(levels === 0 ? 1 : 0);
-  let cur = newLevel(1);
+  let cur = newLevel(1, planes);
   cur.first[0] = 1;
   cur.nbr.fill(-1);
   for (let level = 0; level < depth; ++level) {
@@ -262,6 +299,7 @@ export function decodeSpatial(rc, depth, counts, version) {
     const levelMasks = new Uint8Array(n);
     const first = new Uint32Array(n + 1);
     const kids = new GrowableU32(internal && level + 1 < levels ? Math.min(8 * n, 2 * counts[level + 1]) : 0);
+    if (planes) for (let axis = 0; axis < 3; ++axis) last[axis] = new Uint8Array(2 << level);
     let coded = 0;
     let seen = 0;
     let slots = 0;
@@ -271,8 +309,10 @@ export function decodeSpatial(rc, depth, counts, version) {
         cur.mask[i] = internal ? levelMasks[id] : level > levels ? cellByte(slotLo, slotHi, id) : cellMask(slotLo[id], slotHi[id]);
         continue;
       }
-      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges, mix);
+      if (planes) planeStates(last, cur.pos, i, states);
+      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges, mix, states);
       cur.mask[i] = mask;
+      if (planes) planeRecord(last, cur.pos, i, mask);
       if (level > levels) {
         const s = id >>> 3;
         const c = id & 7;
@@ -314,7 +354,7 @@ export function decodeSpatial(rc, depth, counts, version) {
         slotHi = new Uint32Array(slots);
       }
     }
-    if (level + 1 < depth) cur = expand(cur, level, levels, kids.a);
+    if (level + 1 < depth) cur = expand(cur, level, levels, kids.a, planes);
   }
   const merged = mergeBricks(slotLo, slotHi, counts[levels]);
   if (levels > 0) children[levels - 1] = merged.ids;
