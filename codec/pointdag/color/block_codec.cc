@@ -13,6 +13,7 @@
 #include <string>
 
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/weight_choice.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
@@ -209,8 +210,16 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
   const Threshold threshold(max_mse);
   ASSIGN_OR_RETURN(gpu::VulkanContext* const device,
                    gpu::DeviceFor(gpu::Stage::kColorBlocks, CalibrateColorBlocks, colors.size() < kCalibrationColors));
-  if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
-  return EncodeBlocksOnCpu(colors, layout, threshold);
+  std::vector<ColorBlock> blocks;
+  if (device) {
+    ASSIGN_OR_RETURN(blocks, EncodeBlocksOnDevice(*device, colors, layout, threshold));
+  } else {
+    blocks = EncodeBlocksOnCpu(colors, layout, threshold);
+  }
+  // The weights are chosen after the blocks (weight_choice.h), so both paths give the same bytes.
+  const uint32_t price = WeightRatePrice(threshold.scaled);
+  for (ColorBlock& b : blocks) b.rate_price = price;
+  return blocks;
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
@@ -230,8 +239,10 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
   uint64_t next = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
+  std::vector<uint8_t> weights(kMacroBlockColors);
   for (const ColorBlock& b : blocks) {
-    if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits) {
+    if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits ||
+        b.start + b.length > colors.size()) {
       return Internal("color blocks do not tile the colors");
     }
     next += b.length;
@@ -243,9 +254,10 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
     if (b.bits) {
       const auto ba = code.Components(e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b);
       for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->b[b.bits][c], ZigZag(ba[c]), code.MaxBits());
+      ChooseBlockWeights(colors, b, weights);
       uint32_t prev_w = 16;
-      for (uint32_t i = b.start; i < b.start + b.length; ++i) {
-        const uint32_t w = ChooseWeight(colors[i], b.ends, b.bits);
+      for (uint32_t i = 0; i < b.length; ++i) {
+        const uint32_t w = weights[i];
         EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][prev_w], w, b.bits);
         prev_w = w;
       }

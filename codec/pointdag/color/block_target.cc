@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "pointdag/color/color_metrics.h"
+#include "pointdag/color/weight_choice.h"
 
 namespace pointdag {
 namespace {
@@ -51,11 +52,13 @@ class Judge {
   // The decoder's reconstruction of `blocks` against the input, in luma squared error.
   double Sse(std::span<const ColorBlock> blocks) const {
     double sse = 0;
+    std::vector<uint8_t> weights(kMacroBlockColors);
     for (const ColorBlock& b : blocks) {
+      ChooseBlockWeights(colors_, b, weights);
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         if (!weight_.empty() && weight_[i] == 0) continue;
         const Rgb8 c = colors_[i];
-        const double dy = LumaBt709(c) - LumaBt709(Interpolate(b.ends, ChooseWeight(c, b.ends, b.bits), b.bits));
+        const double dy = LumaBt709(c) - LumaBt709(Interpolate(b.ends, weights[i - b.start], b.bits));
         sse += (weight_.empty() ? 1.0 : weight_[i]) * dy * dy;
       }
     }

@@ -1,0 +1,27 @@
+// Encoder only: the weights a block's colors are stored with, chosen for error and rate together.
+//
+// The weights of a block together minimize the sum of BlockError + price * (estimated bits of each
+// weight after the block's previous one), each weight within one step of the error-minimizing one
+// (ChooseWeight; a Viterbi search). The estimate is a static table of what the stream's adaptive
+// weight models (their context: the previous weight) learn, so that a block's weights depend on
+// that block alone: the threshold search (block_target.cc) measures the same
+// reconstruction the serializer stores and the decoder rebuilds. Price 0: every weight is
+// ChooseWeight's (the error-minimizing choice of stream versions 1 and 2's first writer).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "pointdag/color/block_codec.h"
+
+namespace pointdag {
+
+// The price EncodeBlocks gives the blocks it encodes at threshold `scaled` (a color's allowed
+// BlockError, 3072 x max_mse): BlockError units (1/1024ths) per bit of weights.
+uint32_t WeightRatePrice(uint64_t scaled);
+
+// The weights of block `b` for colors [b.start, b.start + b.length) into out[0, b.length), each in
+// 0..2^b.bits - 1 (all 0 for 0-bit blocks). `colors` is the whole array the block indexes.
+void ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out);
+
+}  // namespace pointdag
