@@ -59,7 +59,7 @@ TEST(WeightChoice, AHigherPriceSavesBitsForError) {
   const auto blocks = *EncodeBlocks(colors, BlockLayout::kVariableRate, 12.0);
   size_t last_size = SIZE_MAX;
   double last_error = -1;
-  for (uint32_t price : {0u, WeightRatePrice(12 * 3072), 4 * WeightRatePrice(12 * 3072)}) {
+  for (uint32_t price : {0u, WeightRatePrice(12.0, colors.size()), 4 * WeightRatePrice(12.0, colors.size())}) {
     const auto priced = WithPrice(blocks, price);
     const auto stream = *SerializeBlocks(colors, priced, BlockLayout::kVariableRate);
     auto decoder = BlockColorDecoder::Open(stream, colors.size());
@@ -74,6 +74,13 @@ TEST(WeightChoice, AHigherPriceSavesBitsForError) {
     last_size = stream.size();
     last_error = error;
   }
+}
+
+// Small arrays are not priced (their weight models stay young).
+TEST(WeightChoice, PricedFromAMacroBlockOfColors) {
+  EXPECT_EQ(WeightRatePrice(12.0, kMacroBlockColors - 1), 0u);
+  EXPECT_GT(WeightRatePrice(12.0, kMacroBlockColors), 0u);
+  EXPECT_EQ(WeightRatePrice(0.0, kMacroBlockColors), 0u);
 }
 
 // The threshold search measures the priced reconstruction, so the stored colors meet the target.

@@ -9,7 +9,6 @@
 #include "pointdag/color/block_target.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/image_mapping.h"
-#include "pointdag/color/weight_choice.h"
 #include "pointdag/pipeline.h"
 #include "test_util.h"
 
@@ -32,15 +31,13 @@ std::vector<Rgb8> SyntheticColors(size_t n, uint32_t seed) {
   return colors;
 }
 
-// What the encoder itself reconstructs for each color: with the weights it stores (rate-aware where
-// the blocks carry a price), or with the error-minimizing ones the merges judge blocks by.
-std::vector<Rgb8> EncoderReconstruction(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks, bool stored = true) {
+// What the encoder itself reconstructs for each color.
+std::vector<Rgb8> EncoderReconstruction(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks) {
   std::vector<Rgb8> out(colors.size());
-  std::vector<uint8_t> weights(kMacroBlockColors);
-  for (ColorBlock b : blocks) {
-    if (!stored) b.rate_price = 0;
-    ChooseBlockWeights(colors, b, weights);
-    for (uint32_t i = 0; i < b.length; ++i) out[b.start + i] = Interpolate(b.ends, weights[i], b.bits);
+  for (const ColorBlock& b : blocks) {
+    for (uint32_t i = b.start; i < b.start + b.length; ++i) {
+      out[i] = Interpolate(b.ends, ChooseWeight(colors[i], b.ends, b.bits), b.bits);
+    }
   }
   return out;
 }
@@ -108,12 +105,10 @@ TEST_P(BlockCodecTest, DecoderReturnsTheEncodersOwnReconstructionAtEveryIndex) {
   const auto all = decoder->DecodeAll();
   ASSERT_EQ(all, expected);
   for (size_t i = 0; i < n; ++i) ASSERT_EQ(decoder->At(i), expected[i]) << "index " << i;
-  // Every block honours the threshold with the error-minimizing weights (the stored, rate-aware ones
-  // trade some error for bits: block_rate_test.cc).
-  const auto judged = EncoderReconstruction(colors, blocks, false);
+  // Every block honours the threshold.
   for (const ColorBlock& b : blocks) {
     double sse = 0;
-    for (uint32_t i = b.start; i < b.start + b.length; ++i) sse += BlockError(colors[i], judged[i]) / 1024.0;
+    for (uint32_t i = b.start; i < b.start + b.length; ++i) sse += BlockError(colors[i], expected[i]) / 1024.0;
     EXPECT_LE(sse / (3.0 * b.length), max_mse + 1e-9);
   }
   // Batch decoding from the middle agrees too.
@@ -400,11 +395,10 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   ASSERT_TRUE(scan.ok());
   const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
   const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
-  // Block stream version 2 (endpoint differences as dG, dR - dG, dB - dG), the cheaper fitter
-  // (2 power-iteration steps, no 1-bit merges) and rate-aware weights (weight_choice.h, more error
-  // at the same threshold); error-minimizing weights: 8990 and 9157; version 1 with the old fitter: 9596 and 9342.
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 8354u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 8306u);
+  // Block stream version 2 (endpoint differences as dG, dR - dG, dB - dG) and the cheaper fitter
+  // (2 power-iteration steps, no 1-bit merges); version 1 with the old fitter: 9596 and 9342.
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 8990u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9157u);
   // Lossless version 2 (context coder): from neighbours found by Morton code, and from the previous
   // color alone (mipmap order). Version 1 (zstd differences) took 72993 bytes; 46558 before the radius-4 search for isolated voxels.
   const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};

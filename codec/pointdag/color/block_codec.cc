@@ -210,16 +210,8 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
   const Threshold threshold(max_mse);
   ASSIGN_OR_RETURN(gpu::VulkanContext* const device,
                    gpu::DeviceFor(gpu::Stage::kColorBlocks, CalibrateColorBlocks, colors.size() < kCalibrationColors));
-  std::vector<ColorBlock> blocks;
-  if (device) {
-    ASSIGN_OR_RETURN(blocks, EncodeBlocksOnDevice(*device, colors, layout, threshold));
-  } else {
-    blocks = EncodeBlocksOnCpu(colors, layout, threshold);
-  }
-  // The weights are chosen after the blocks (weight_choice.h), so both paths give the same bytes.
-  const uint32_t price = WeightRatePrice(threshold.scaled);
-  for (ColorBlock& b : blocks) b.rate_price = price;
-  return blocks;
+  if (device) return EncodeBlocksOnDevice(*device, colors, layout, threshold);
+  return EncodeBlocksOnCpu(colors, layout, threshold);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,

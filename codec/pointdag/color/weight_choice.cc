@@ -15,18 +15,22 @@ namespace {
 constexpr std::array<std::array<uint8_t, 16>, kMaxWeightBits + 1> kDistanceCost = {{
     {},
     {0, 16},
-    {0, 29, 77, 118},
-    {0, 22, 50, 70, 90, 106, 125, 144},
-    {0, 10, 26, 40, 50, 61, 72, 82, 91, 99, 107, 115, 122, 128, 133, 138},
+    {0, 39, 85, 112},
+    {0, 28, 56, 78, 98, 116, 133, 146},
+    {0, 15, 31, 45, 55, 66, 76, 85, 94, 104, 111, 122, 127, 137, 148, 153},
 }};
 
 constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
 
 }  // namespace
 
-// Price = 0.7 x a color's allowed error per bit: lion, guanyin, autzen, milk and IGN at 34-42 dB
-// were smallest at equal PSNR-Y near 0.7 (1.0 and more cost IGN and lion at 42 dB up to 1.5 %).
-uint32_t WeightRatePrice(uint64_t scaled) { return static_cast<uint32_t>(std::min<uint64_t>(scaled * 7 / 10, UINT32_MAX)); }
+// 0.7 x a color's allowed error (BlockError 3072 max_mse, block_codec.cc) per bit: lion, guanyin,
+// autzen, milk and IGN at 34-42 dB were smallest at equal PSNR-Y near 0.7 (1.0 and more cost IGN
+// and lion at 42 dB up to 1.5 %).
+uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
+  if (array_colors < kMacroBlockColors || !(max_mse > 0)) return 0;
+  return static_cast<uint32_t>(std::min(max_mse * 3072.0 * 0.7, 4e9));
+}
 
 void ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {
   const std::span<const Rgb8> block = colors.subspan(b.start, b.length);

@@ -9,6 +9,7 @@
 // ChooseWeight's (the error-minimizing choice of stream versions 1 and 2's first writer).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 
@@ -16,9 +17,10 @@
 
 namespace pointdag {
 
-// The price EncodeBlocks gives the blocks it encodes at threshold `scaled` (a color's allowed
-// BlockError, 3072 x max_mse): BlockError units (1/1024ths) per bit of weights.
-uint32_t WeightRatePrice(uint64_t scaled);
+// The price the threshold search (block_target.cc) gives blocks encoded at `max_mse` for an array
+// of `array_colors`: BlockError units (1/1024ths) per bit of weights. 0 for arrays under a macro
+// block, whose weight models stay too young for the estimate (tiny at 8 ft grew up to 7 %).
+uint32_t WeightRatePrice(double max_mse, size_t array_colors);
 
 // The weights of block `b` for colors [b.start, b.start + b.length) into out[0, b.length), each in
 // 0..2^b.bits - 1 (all 0 for 0-bit blocks). `colors` is the whole array the block indexes.
