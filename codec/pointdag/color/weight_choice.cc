@@ -34,13 +34,14 @@ uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
 
 void ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {
   const std::span<const Rgb8> block = colors.subspan(b.start, b.length);
-  for (uint32_t i = 0; i < b.length; ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], b.ends, b.bits));
+  const Endpoints ends = b.ends;  // a local copy: the stores to `out` may not alias it, so its axis is computed once
+  for (uint32_t i = 0; i < b.length; ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, b.bits));
   if (b.bits == 0 || b.rate_price == 0) return;
   // Viterbi over each color's error-minimizing weight and its two neighbours (wider choices moved
   // nothing on lion, guanyin and autzen). The first weight of a block costs the same whatever it is.
   const int top = (1 << b.bits) - 1;
   std::array<Rgb8, 1 << kMaxWeightBits> palette;
-  for (int w = 0; w <= top; ++w) palette[w] = Interpolate(b.ends, static_cast<uint32_t>(w), b.bits);
+  for (int w = 0; w <= top; ++w) palette[w] = Interpolate(ends, static_cast<uint32_t>(w), b.bits);
   const auto& rate = kDistanceCost[b.bits];
   std::vector<uint8_t> from(size_t{b.length} * 3);  // per color and choice: the previous color's choice
   std::array<uint64_t, 3> cost{}, next{};
