@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <limits>
 #include <vector>
 
@@ -9,9 +10,10 @@ namespace pointdag {
 namespace {
 
 // Estimated bits of weight w after weight `prev` of the same block, in 1/16ths, less those of
-// w = prev: by |w - prev| and the width, from what the adaptive models coded on lion, guanyin and
-// autzen at 34 and 42 dB (-log2 of the share of each distance, halved for the two sides; the three
-// scans agree within ~0.5 bit). At 4 bits neighbours' weights differ by one step as often as not.
+// w = prev: by |w - prev| and the width, -log2 of the share of each distance (halved for the two
+// sides) in the weights coded on lion, guanyin and autzen at 34 and 42 dB with this choice on (its
+// fixed point: the table from error-minimizing weights gave sizes within 0.2 %; the scans agree
+// within ~0.5 bit). At 4 bits neighbours' weights differ by one step about as often as not.
 constexpr std::array<std::array<uint8_t, 16>, kMaxWeightBits + 1> kDistanceCost = {{
     {},
     {0, 16},
@@ -25,8 +27,8 @@ constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
 }  // namespace
 
 // 0.7 x a color's allowed error (BlockError 3072 max_mse, block_codec.cc) per bit: lion, guanyin,
-// autzen, milk and IGN at 34-42 dB were smallest at equal PSNR-Y near 0.7 (1.0 and more cost IGN
-// and lion at 42 dB up to 1.5 %).
+// autzen, milk and IGN at 34-42 dB were smallest at equal PSNR-Y near 0.7 (1.0 cost IGN at 42 dB
+// 2.4 %, 2.5 cost lion at every target).
 uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
   if (array_colors < kMacroBlockColors || !(max_mse > 0)) return 0;
   return static_cast<uint32_t>(std::min(max_mse * 3072.0 * 0.7, 4e9));
