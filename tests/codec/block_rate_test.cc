@@ -76,6 +76,22 @@ TEST(WeightChoice, AHigherPriceSavesBitsForError) {
   }
 }
 
+// Refitted endpoints are kept only where they lower the priced cost, and they often do.
+TEST(WeightChoice, RefitNeverRaisesTheCost) {
+  const auto colors = NoisyGradient(40000, 4);
+  const auto blocks = WithPrice(*EncodeBlocks(colors, BlockLayout::kVariableRate, 12.0), WeightRatePrice(12.0, colors.size()));
+  std::vector<uint8_t> w(kMacroBlockColors);
+  size_t moved = 0;
+  for (ColorBlock b : blocks) {
+    const uint64_t before = ChooseBlockWeights(colors, b, w);
+    const Endpoints ends = b.ends;
+    RefitEnds(colors, b);
+    EXPECT_LE(ChooseBlockWeights(colors, b, w), before);
+    moved += !(b.ends == ends);
+  }
+  EXPECT_GT(moved, 0u);
+}
+
 // Small arrays are not priced (their weight models stay young).
 TEST(WeightChoice, PricedFromAMacroBlockOfColors) {
   EXPECT_EQ(WeightRatePrice(12.0, kMacroBlockColors - 1), 0u);

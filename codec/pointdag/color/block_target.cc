@@ -76,17 +76,21 @@ class Judge {
   size_t count_;
 };
 
-// The blocks' weights are chosen rate-aware (weight_choice.h) at a price that follows the threshold.
-void Price(std::span<ColorBlock> blocks, double max_mse, size_t array_colors) {
-  const uint32_t price = WeightRatePrice(max_mse, array_colors);
-  for (ColorBlock& b : blocks) b.rate_price = price;
+// The blocks' weights are chosen rate-aware (weight_choice.h) at a price that follows the threshold,
+// and their endpoints refitted for those weights (lion, guanyin, autzen 1-7 % smaller at equal PSNR-Y).
+void Price(std::span<const Rgb8> colors, std::span<ColorBlock> blocks, double max_mse) {
+  const uint32_t price = WeightRatePrice(max_mse, colors.size());
+  for (ColorBlock& b : blocks) {
+    b.rate_price = price;
+    RefitEnds(colors, b);
+  }
 }
 
 Status EncodeUnit(std::span<const Rgb8> colors, BlockLayout layout, const Judge& judge, Unit& unit) {
   const double max_mse = std::exp(unit.log_t);
   ASSIGN_OR_RETURN(unit.blocks, EncodeBlocks(colors.subspan(unit.begin, unit.count), layout, max_mse));
   for (ColorBlock& b : unit.blocks) b.start += unit.begin;
-  Price(unit.blocks, max_mse, colors.size());
+  Price(colors, unit.blocks, max_mse);
   unit.sse = judge.Sse(unit.blocks);
   return Status::Ok();
 }
@@ -165,7 +169,7 @@ StatusOr<TargetBlocks> BlocksForTarget(std::span<const Rgb8> colors, std::span<c
   // the unit size (a power of two up to a macro block, so that every macro block starts a unit):
   // each unit can then be encoded again on its own.
   ASSIGN_OR_RETURN(std::vector<ColorBlock> all, EncodeBlocks(colors, layout, std::exp(prediction.log_t)));
-  Price(all, std::exp(prediction.log_t), colors.size());
+  Price(colors, all, std::exp(prediction.log_t));
   out.encodes += 1;
   const uint32_t unit_size = std::clamp<uint32_t>(std::bit_floor(static_cast<uint32_t>(colors.size() / kUnitsWanted)),
                                                   kSmallestUnit, kMacroBlockColors);

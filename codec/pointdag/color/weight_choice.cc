@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <vector>
@@ -34,11 +35,11 @@ uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
   return static_cast<uint32_t>(std::min(max_mse * 3072.0 * 0.7, 4e9));
 }
 
-void ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {
+uint64_t ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {
   const std::span<const Rgb8> block = colors.subspan(b.start, b.length);
   const Endpoints ends = b.ends;  // a local copy: the stores to `out` may not alias it, so its axis is computed once
   for (uint32_t i = 0; i < b.length; ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, b.bits));
-  if (b.bits == 0 || b.rate_price == 0) return;
+  if (b.bits == 0 || b.rate_price == 0) return 0;
   // Viterbi over each color's error-minimizing weight and its two neighbours (wider choices moved
   // nothing on lion, guanyin and autzen). The first weight of a block costs the same whatever it is.
   const int top = (1 << b.bits) - 1;
@@ -76,6 +77,35 @@ void ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::
     out[i] = static_cast<uint8_t>(out[i] - 1 + s);
     s = previous;
   }
+  return *std::min_element(cost.begin(), cost.end());
+}
+
+// Least squares for fixed weights t = w / m: A and B minimize the summed squared error of
+// (1 - t) A + t B in any metric (Q factors out of the normal equations), per channel a 2x2 system.
+void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b) {
+  if (b.bits == 0 || b.rate_price == 0 || b.length < 3) return;
+  thread_local std::vector<uint8_t> w;
+  w.resize(b.length);
+  const uint64_t before = ChooseBlockWeights(colors, b, w);
+  const double m = (1 << b.bits) - 1;
+  double aa = 0, ab = 0, bb = 0, x[3] = {}, y[3] = {};
+  for (uint32_t i = 0; i < b.length; ++i) {
+    const double t = w[i] / m, u = 1 - t;
+    const Rgb8 c = colors[b.start + i];
+    aa += u * u, ab += u * t, bb += t * t;
+    const double ch[3] = {static_cast<double>(c.r), static_cast<double>(c.g), static_cast<double>(c.b)};
+    for (int k = 0; k < 3; ++k) x[k] += u * ch[k], y[k] += t * ch[k];
+  }
+  const double det = aa * bb - ab * ab;
+  if (!(det > 1e-9)) return;
+  uint8_t na[3], nb[3];
+  for (int k = 0; k < 3; ++k) {
+    na[k] = static_cast<uint8_t>(std::clamp(std::lround((bb * x[k] - ab * y[k]) / det), 0l, 255l));
+    nb[k] = static_cast<uint8_t>(std::clamp(std::lround((aa * y[k] - ab * x[k]) / det), 0l, 255l));
+  }
+  ColorBlock trial = b;
+  trial.ends = {{na[0], na[1], na[2]}, {nb[0], nb[1], nb[2]}};
+  if (trial.ends != b.ends && ChooseBlockWeights(colors, trial, w) < before) b.ends = trial.ends;
 }
 
 }  // namespace pointdag
