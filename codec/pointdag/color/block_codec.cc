@@ -13,6 +13,7 @@
 #include <string>
 
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/weight_choice.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
@@ -235,8 +236,10 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
   uint64_t next = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
+  std::vector<uint8_t> weights(kMacroBlockColors);
   for (const ColorBlock& b : blocks) {
-    if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits) {
+    if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits ||
+        b.start + b.length > colors.size()) {
       return Internal("color blocks do not tile the colors");
     }
     next += b.length;
@@ -248,9 +251,10 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
     if (b.bits) {
       const auto ba = code.Components(e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b);
       for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->b[b.bits][c], ZigZag(ba[c]), code.MaxBits());
+      ChooseBlockWeights(colors, b, weights);
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
-        const uint32_t w = ChooseWeight(colors[i], b.ends, b.bits);
+        const uint32_t w = weights[i - b.start];
         const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
         EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
         if (spatial) spatial->Record(i, Interpolate(b.ends, w, b.bits));

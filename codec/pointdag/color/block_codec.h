@@ -40,6 +40,9 @@ struct ColorBlock {
   uint32_t length = 0;
   uint8_t bits = 0;     // bits per weight, 0..4
   Endpoints ends;
+  // What a bit of weights is worth in BlockError units when the encoder chooses them (weight_choice.h);
+  // 0: each weight minimizes its own error. Not stored: the stream holds the weights chosen.
+  uint32_t rate_price = 0;
 };
 
 enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
