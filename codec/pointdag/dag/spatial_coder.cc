@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstdlib>
+#include <new>
 #include <memory>
 
 #include "pointdag/dag/mask_mixer.h"
@@ -211,9 +213,19 @@ Around Surroundings(const Level& lv, size_t i) {
 // neighbours: ground and façades (IGN 0.1 m: −5.6 %).
 class PlaneMemory {
  public:
-  // Forgets all: the planes of `level`'s children, 2^(level+1) per axis.
+  // Forgets all: the planes of `level`'s children, 2^(level+1) per axis. Entries of earlier levels
+  // carry an older stamp and read as 0, so nothing is cleared: the buffers come from calloc, whose
+  // large blocks are untouched pages, and a level costs the pages its cells touch, not 2^level
+  // (a hostile stream of a few bytes may still claim depth 21).
   void Reset(int level) {
-    for (auto& axis : last_) axis.assign(size_t{2} << level, 0);
+    stamp_ = static_cast<uint8_t>(level + 1);  // levels < 32: (stamp << 2 | state) fits a byte
+    const size_t n = size_t{2} << level;
+    if (n <= size_) return;
+    for (auto& axis : last_) {
+      axis.reset(static_cast<uint8_t*>(std::calloc(n, 1)));
+      if (!axis) throw std::bad_alloc();
+    }
+    size_ = n;
   }
   // Per child c of a cell at `pos`: 9·x state + 3·y state + z state.
   std::array<uint8_t, 8> States(const std::array<uint32_t, 3>& pos) const {
@@ -222,19 +234,30 @@ class PlaneMemory {
     const uint8_t* z = &last_[2][2 * pos[2]];
     std::array<uint8_t, 8> out;
 #pragma GCC unroll 8
-    for (int c = 0; c < 8; ++c) out[c] = static_cast<uint8_t>(9 * x[(c >> 2) & 1] + 3 * y[(c >> 1) & 1] + z[c & 1]);
+    for (int c = 0; c < 8; ++c) {
+      out[c] = static_cast<uint8_t>(9 * State(x[(c >> 2) & 1]) + 3 * State(y[(c >> 1) & 1]) + State(z[c & 1]));
+    }
     return out;
   }
   void Record(const std::array<uint32_t, 3>& pos, unsigned mask) {
     static constexpr std::array<unsigned, 3> kLowHalf = {0x0F, 0x33, 0x55};  // children with the axis bit 0
+    const uint8_t no = static_cast<uint8_t>(stamp_ << 2 | 1), yes = static_cast<uint8_t>(stamp_ << 2 | 2);
     for (int axis = 0; axis < 3; ++axis) {
-      last_[axis][2 * pos[axis]] = (mask & kLowHalf[axis]) ? 2 : 1;
-      last_[axis][2 * pos[axis] + 1] = (mask & ~kLowHalf[axis] & 0xFFu) ? 2 : 1;
+      last_[axis][2 * pos[axis]] = (mask & kLowHalf[axis]) ? yes : no;
+      last_[axis][2 * pos[axis] + 1] = (mask & ~kLowHalf[axis] & 0xFFu) ? yes : no;
     }
   }
 
  private:
-  std::array<std::vector<uint8_t>, 3> last_;
+  // 0 = none coded yet on this level, 1 = no, 2 = yes.
+  unsigned State(uint8_t entry) const { return (entry >> 2) == stamp_ ? entry & 3u : 0u; }
+
+  struct Free {
+    void operator()(uint8_t* p) const { std::free(p); }
+  };
+  std::array<std::unique_ptr<uint8_t[], Free>, 3> last_;
+  size_t size_ = 0;
+  uint8_t stamp_ = 0;
 };
 
 // Codes the 8 child bits of cell i, child 0 first; a last bit that must be 1 (mask non-empty) is

@@ -49,7 +49,7 @@ struct YoungBitModel {
   static constexpr int kYoung = 127;  // 1/(n+2) is below both rates from here on
   static constexpr std::array<Rates, kYoung + 1> kRates = [] {
     std::array<Rates, kYoung + 1> t{};
-    for (int n = 0; n <= kYoung; ++n) t[n] = {std::max(65536 / (n + 2), 65536 >> 4), std::max(65536 / (n + 2), 65536 >> 7)};
+    for (int i = 0; i <= kYoung; ++i) t[i] = {std::max(65536 / (i + 2), 65536 >> 4), std::max(65536 / (i + 2), 65536 >> 7)};
     return t;
   }();
 };
