@@ -1,6 +1,8 @@
 #include "pointdag/compare/point_metrics.h"
 
 #include <flann/flann.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <cmath>
 
@@ -92,10 +94,14 @@ double MedianPointSpacing(std::span<const std::array<double, 3>> points) {
   tree.buildIndex();
   std::vector<size_t> idx(2 * points.size());
   std::vector<double> dist(2 * points.size());
-  flann::Matrix<size_t> idx_m(idx.data(), points.size(), 2);
-  flann::Matrix<double> dist_m(dist.data(), points.size(), 2);
-  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
-  tree.knnSearch(data_m, idx_m, dist_m, 2, params);
+  const flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
+  // Exact searches (one tree, unlimited checks), so the split across cores changes no distance.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    flann::Matrix<double> queries(data.data() + 3 * r.begin(), r.size(), 3);
+    flann::Matrix<size_t> idx_m(idx.data() + 2 * r.begin(), r.size(), 2);
+    flann::Matrix<double> dist_m(dist.data() + 2 * r.begin(), r.size(), 2);
+    tree.knnSearch(queries, idx_m, dist_m, 2, params);
+  });
   // The first neighbour is the point itself; duplicates (distance 0) say nothing about spacing.
   std::vector<double> nearest;
   for (size_t i = 0; i < points.size(); ++i) {
