@@ -1,6 +1,5 @@
 #include "pointdag/tile/tiler.h"
 
-#include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -64,13 +63,12 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
     const VoxelGrid* level;
     size_t first, end;
   };
-  // The coarser levels, each averaged from the finest voxels on its own core; the finest level is
-  // `finest` itself.
-  std::vector<VoxelGrid> coarser(static_cast<size_t>(set.levels - 1));
-  tbb::parallel_for(size_t{0}, coarser.size(), [&](size_t l) { coarser[l] = LevelGrid(finest, static_cast<int>(l), set.tile_depth); });
+  // The coarser levels averaged from the finest voxels; the finest level is `finest` itself, not a copy.
+  std::vector<VoxelGrid> coarser;
+  coarser.reserve(static_cast<size_t>(set.levels - 1));
   std::vector<Pending> pending;
   for (int l = 0; l < set.levels; ++l) {
-    const VoxelGrid& grid = l + 1 < set.levels ? coarser[static_cast<size_t>(l)] : finest;
+    const VoxelGrid& grid = l + 1 < set.levels ? coarser.emplace_back(LevelGrid(finest, l, set.tile_depth)) : finest;
     for (size_t i = 0; i < grid.morton.size();) {
       const uint64_t tile_code = grid.morton[i] >> local_bits;
       size_t j = i;
