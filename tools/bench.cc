@@ -193,9 +193,15 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
   const uint64_t peak = RssAndPeak().second;
   const double points = static_cast<double>(ingested->grid.points_in);
   uint64_t finest_bytes = 0;
+  // FNV-1a over every tile's bytes in key order: equal digests, equal datasets (for checking that a
+  // speed change changed no byte).
+  uint64_t digest = 0xcbf29ce484222325;
   for (const Tile& t : ingested->tiles.tiles) {
     if (t.key.level == ingested->tiles.levels - 1) finest_bytes += t.bytes.size();
+    for (uint8_t b : t.bytes) digest = (digest ^ b) * 0x100000001b3;
   }
+  char tiles_digest[17];
+  std::snprintf(tiles_digest, sizeof(tiles_digest), "%016llx", static_cast<unsigned long long>(digest));
   const double finest_bpv = 8.0 * static_cast<double>(finest_bytes) / static_cast<double>(ingested->grid.morton.size());
   return {{"scan", scan.filename().string()},
           {"points", ingested->grid.points_in},
@@ -204,6 +210,7 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
           {"voxels", ingested->grid.morton.size()},
           {"levels", ingested->tiles.levels},
           {"tiles", ingested->tiles.tiles.size()},
+          {"tiles_fnv1a", tiles_digest},
           {"all_levels_bits_per_point", 8.0 * static_cast<double>(ingested->tiles.stored_bytes()) / points},
           {"finest_bits_per_voxel", finest_bpv},
           {"draco_bits_per_point", ingested->draco.bits_per_point},

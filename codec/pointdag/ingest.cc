@@ -7,14 +7,28 @@
 #include "pointdag/compare/point_metrics.h"
 
 namespace pointdag {
-StatusOr<double> DeriveVoxelSize(ScanReader& reader) {
+namespace {
+
+// The first points of a scan, for its spacing; the reader is rewound.
+StatusOr<PointBatch> SpacingSample(ScanReader& reader) {
   PointBatch batch;
   ASSIGN_OR_RETURN(const size_t n, reader.Read(batch, 1 << 16));
   RETURN_IF_ERROR(reader.Rewind());
   if (n == 0) return InvalidArgument("the scan holds no points");
-  const double spacing = MedianPointSpacing(batch.xyz);
+  return batch;
+}
+
+StatusOr<double> VoxelSizeFromSample(const PointBatch& sample) {
+  const double spacing = MedianPointSpacing(sample.xyz);
   if (!(spacing > 0)) return InvalidArgument("cannot derive a voxel size: the first points all coincide; pass voxel");
   return RoundUpTo125(spacing);
+}
+
+}  // namespace
+
+StatusOr<double> DeriveVoxelSize(ScanReader& reader) {
+  ASSIGN_OR_RETURN(const PointBatch sample, SpacingSample(reader));
+  return VoxelSizeFromSample(sample);
 }
 
 double RoundUpTo125(double spacing) {
@@ -43,11 +57,17 @@ StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const Inges
   out.frame = std::move(framed.frame);
   VoxelizeOptions vopt;
   vopt.voxel_size = options.voxel_size;
+  // The spacing's nearest-neighbour search (one core) runs beside the survey pass, which does not
+  // need the voxel size; the future's destructor waits for it on every return.
+  std::future<StatusOr<double>> derived;
   if (!vopt.voxel_size) {
-    ASSIGN_OR_RETURN(vopt.voxel_size, DeriveVoxelSize(*framed.reader));
+    ASSIGN_OR_RETURN(PointBatch sample, SpacingSample(*framed.reader));
+    derived = std::async(std::launch::async, [sample = std::move(sample)] { return VoxelSizeFromSample(sample); });
+    vopt.voxel_size_after_survey = [&derived] { return derived.get(); };
     out.voxel_size_derived = true;
+  } else if (!(*vopt.voxel_size > 0) || !std::isfinite(*vopt.voxel_size)) {
+    return InvalidArgument("voxel size must be a positive number");
   }
-  if (!(*vopt.voxel_size > 0) || !std::isfinite(*vopt.voxel_size)) return InvalidArgument("voxel size must be a positive number");
   vopt.max_points_in_memory = options.max_points_in_memory;
   vopt.spill_dir = options.spill_dir;
   vopt.progress = [&](uint64_t done, uint64_t total) { report("voxelize", total ? double(done) / double(total) : 0); };

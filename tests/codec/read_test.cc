@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
+#include "pointdag/read/pcl_reader.h"
 #include "pointdag/read/scan_reader.h"
 #include "test_util.h"
 
@@ -358,6 +360,92 @@ TEST(PclReader, PlyDeclaringAbsurdCountIsAnError) {
   WriteText(dir / "huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\n"
                               "property float y\nproperty float z\nend_header\n");
   EXPECT_FALSE(OpenScan(dir / "huge.ply").ok());
+}
+
+// ---- Binary little-endian PLY read by our own code (ply_reader.h) ----
+
+// Every point of `path` through OpenScan and through PCL, in batches of 3, twice (a rewind between).
+void ExpectSameAsPcl(const std::filesystem::path& path) {
+  auto ours = OpenScan(path);
+  auto pcl = OpenPclScan(path, ScanFormat::kPly);
+  ASSERT_TRUE(ours.ok() && pcl.ok()) << ours.status().ToString() << pcl.status().ToString();
+  EXPECT_EQ((*ours)->info().has_color, (*pcl)->info().has_color);
+  EXPECT_EQ((*ours)->info().point_count, (*pcl)->info().point_count);
+  EXPECT_EQ((*ours)->info().format_version, (*pcl)->info().format_version);
+  for (int pass = 0; pass < 2; ++pass) {
+    PointBatch a, b;
+    for (;;) {
+      const auto na = (*ours)->Read(a, 3), nb = (*pcl)->Read(b, 3);
+      ASSERT_TRUE(na.ok() && nb.ok());
+      ASSERT_EQ(*na, *nb);
+      if (*na == 0) break;
+      EXPECT_EQ(a.xyz, b.xyz);
+      EXPECT_EQ(a.rgb, b.rgb);
+    }
+    EXPECT_EQ((*ours)->max_color_seen(), (*pcl)->max_color_seen());
+    ASSERT_TRUE((*ours)->Rewind().ok() && (*pcl)->Rewind().ok());
+  }
+}
+
+template <class T>
+void Put(std::string& out, T v) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &v, sizeof(T));
+  out.append(bytes, sizeof(T));
+}
+
+TEST(PlainPlyReader, GivesWhatPclGivesForEveryLayoutItTakesOrLeaves) {
+  ScratchDir dir;
+  // float xyz with a property between, uchar colors: ours.
+  std::string a = "ply\nformat binary_little_endian 1.0\nelement vertex 7\nproperty float x\nproperty float intensity\n"
+                  "property float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                  "end_header\n";
+  // double xyz, no color, then another element: ours.
+  std::string b = "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 7\r\nproperty double x\r\nproperty double y\r\n"
+                  "property double z\r\nproperty short nx\r\nelement face 0\r\nproperty list uchar int vertex_indices\r\n"
+                  "end_header\r\n";
+  // float colors: PCL's.
+  std::string c = "ply\nformat binary_little_endian 1.0\nelement vertex 7\nproperty float x\nproperty float y\n"
+                  "property float z\nproperty float red\nproperty float green\nproperty float blue\nend_header\n";
+  for (int i = 0; i < 7; ++i) {
+    const float k = static_cast<float>(i);
+    const float f[3] = {1.5f * k, -2.0f + k, 1e6f + 0.125f * k};
+    Put(a, f[0]);
+    Put(a, 7.0f);
+    Put(a, f[1]);
+    Put(a, f[2]);
+    a += std::string{static_cast<char>(10 * i), static_cast<char>(255 - i), static_cast<char>(3 * i)};
+    for (float v : f) Put(b, 1e7 + v / 3.0);
+    Put(b, int16_t{-5});
+    for (float v : f) Put(c, v);
+    for (float v : {0.5f, 0.25f * k / 7, 1.0f}) Put(c, v);
+  }
+  WriteText(dir / "a.ply", a);
+  WriteText(dir / "b.ply", b);
+  WriteText(dir / "c.ply", c);
+  ExpectSameAsPcl(dir / "a.ply");
+  ExpectSameAsPcl(dir / "b.ply");
+  ExpectSameAsPcl(dir / "c.ply");
+}
+
+TEST(PlainPlyReader, NonFiniteCoordinateIsAnErrorNamingThePoint) {
+  ScratchDir dir;
+  std::string text = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                     "property float z\nend_header\n";
+  for (float v : {1.0f, 2.0f, 3.0f, 1.0f, std::numeric_limits<float>::infinity(), 3.0f}) Put(text, v);
+  WriteText(dir / "inf.ply", text);
+  auto reader = OpenScan(dir / "inf.ply");
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  const auto survey = SurveyScan(**reader);
+  ASSERT_FALSE(survey.ok());
+  EXPECT_EQ(survey.status().code(), StatusCode::kMalformed);
+  EXPECT_NE(survey.status().message().find("point 1"), std::string::npos) << survey.status().message();
+}
+
+TEST(PlainPlyReader, RealScansAsPclReadsThem) {
+  SKIP_WITHOUT_DATA();
+  ExpectSameAsPcl(DataDir() / "pcx_guanyin_cc-by-4.0_rgb.ply");
+  ExpectSameAsPcl(DataDir() / "pcl_milk_cartoon_clorox_kinect_rgb.ply");
 }
 
 TEST(PclReader, ReadsAsciiAndBinaryPcdWithPackedRgb) {

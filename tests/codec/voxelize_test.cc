@@ -2,6 +2,7 @@
 
 #include "pointdag/read/memory_reader.h"
 #include "pointdag/voxelize/morton.h"
+#include "pointdag/voxelize/radix_sort.h"
 #include "pointdag/voxelize/voxelizer.h"
 #include "test_util.h"
 
@@ -80,6 +81,50 @@ TEST(Voxelizer, RejectsBadOptions) {
   VoxelizeOptions shallow;
   shallow.depth = 1;
   EXPECT_EQ(VoxelizeInMemory({{0, 0, 0}}, {}, shallow).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(Voxelizer, VoxelSizeAfterTheSurveyGivesTheSameGrid) {
+  std::vector<std::array<double, 3>> xyz;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> coord(0, 10);
+  for (int i = 0; i < 5000; ++i) xyz.push_back({coord(rng), coord(rng), coord(rng)});
+  VoxelizeOptions given;
+  given.voxel_size = 0.5;
+  VoxelizeOptions later;
+  bool asked = false;
+  later.voxel_size_after_survey = [&]() -> StatusOr<double> {
+    asked = true;
+    return 0.5;
+  };
+  const auto a = VoxelizeInMemory(xyz, {}, given), b = VoxelizeInMemory(xyz, {}, later);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_TRUE(asked);
+  EXPECT_EQ(a->morton, b->morton);
+  EXPECT_EQ(a->depth, b->depth);
+  later.voxel_size_after_survey = []() -> StatusOr<double> { return InvalidArgument("no spacing"); };
+  EXPECT_EQ(VoxelizeInMemory(xyz, {}, later).status().code(), StatusCode::kInvalidArgument);
+  later.voxel_size = 0.5;  // two sizes
+  EXPECT_EQ(VoxelizeInMemory(xyz, {}, later).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(RadixSort, SortsLikeStdSortWithDuplicatesAndEveryWidth) {
+  std::mt19937_64 rng(3);
+  for (int bits : {1, 7, 8, 9, 30, 63}) {
+    for (size_t n : {size_t{0}, size_t{1}, size_t{63}, size_t{64}, size_t{5000}, size_t{100000}}) {
+      std::vector<std::pair<uint64_t, uint32_t>> items(n);
+      // Few distinct keys for some widths: many duplicates, deep recursion on equal keys.
+      const uint64_t mask = bits == 63 ? (uint64_t{1} << 63) - 1 : (uint64_t{1} << bits) - 1;
+      for (size_t i = 0; i < n; ++i) items[i] = {rng() & mask & (n > 5000 ? ~uint64_t{0} : 0xFFF0F0), static_cast<uint32_t>(i)};
+      auto expected = items;
+      std::sort(expected.begin(), expected.end());
+      RadixSortInPlace(std::span(items), bits, [](const auto& item) { return item.first; });
+      ASSERT_TRUE(std::is_sorted(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; }));
+      std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) {
+        return a.first != b.first ? a.first < b.first : a.second < b.second;
+      });  // equal keys may come in any order: the same items?
+      ASSERT_EQ(items, expected) << bits << " bits, " << n << " items";
+    }
+  }
 }
 
 TEST(Voxelizer, NonFinitePointIsAnError) {

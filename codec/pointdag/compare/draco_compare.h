@@ -21,8 +21,8 @@ struct DracoResult {
   // One encode with the kd-tree coder at speed 0 (draco_encoder -cl 10; its -qp 11 is moot for
   // integer voxel coordinates), the yardstick for our encode speed; Draco is single-threaded.
   double level10_seconds = 0;
-  // Decoding the smallest encoding back to a point cloud (best of three; one decode for kBestLevel),
-  // the yardstick for our decode rate (issue #14 goal 6).
+  // Decoding the smallest encoding back to a point cloud, best of three (kExhaustive only; 0 for
+  // kBestLevel), the yardstick for our decode rate (issue #14 goal 6).
   double decode_seconds = 0;
 };
 

@@ -176,7 +176,7 @@ class PcdHeaderParser {
     if (points_ == 0) return Malformed("PCD header declares zero points");
     RETURN_IF_ERROR(CheckBodyStart());
     RETURN_IF_ERROR(CheckBodySize());
-    return CheckedHeader{points_, encoding_};
+    return CheckedHeader{points_, encoding_, 0, {}};
   }
 
   // PCL reads on after DATA as long as lines are blank, comments or start with a header keyword

@@ -41,6 +41,7 @@ struct Element {
   std::string name;
   uint64_t count = 0;
   std::vector<std::string> properties;
+  std::vector<std::string> scalar_types;  // parallel to properties while no list comes
   std::vector<std::string> lists;  // names of list properties
   uint64_t min_record_bytes = 0;   // binary: scalars plus each list's length word
 };
@@ -130,7 +131,7 @@ class PlyHeaderParser {
     if (elements_.size() == kMaxPlyElements) {
       return ResourceLimit(where_ + ": more than " + std::to_string(kMaxPlyElements) + " elements");
     }
-    elements_.push_back({std::string(t[1]), *count, {}, {}, 0});
+    elements_.push_back({std::string(t[1]), *count, {}, {}, {}, 0});
     if (t[1] == "vertex" && (grid_width_ == 0 || grid_height_ == 0)) {  // as PCL sizes the cloud
       grid_width_ = static_cast<uint32_t>(*count);
       grid_height_ = 1;
@@ -167,6 +168,7 @@ class PlyHeaderParser {
       if (size == 0) return Malformed(where_ + ": unknown PLY type " + Quote(t[1]));
       if (e.name == "vertex" && (t[1] == "uchar" || t[1] == "uint8")) RETURN_IF_ERROR(CheckColorOrder(name));
       e.min_record_bytes += size;
+      e.scalar_types.emplace_back(t[1]);
     }
     e.properties.emplace_back(name);
     return Status::Ok();
@@ -208,7 +210,11 @@ class PlyHeaderParser {
                        " vertices declared");
     }
     RETURN_IF_ERROR(CheckBodySize());
-    return CheckedHeader{vertex->count, encoding_};
+    CheckedHeader out{vertex->count, encoding_, body_offset_, {}};
+    if (vertex == &elements_.front()) {
+      for (size_t i = 0; i < vertex->properties.size(); ++i) out.first_vertex_scalars.push_back({vertex->properties[i], vertex->scalar_types[i]});
+    }
+    return out;
   }
 
   // Each element's instances must fit in what is left of the file: binary records need their

@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "pointdag/status.h"
 
@@ -41,9 +42,18 @@ inline constexpr uint64_t kMaxFieldCount = 1 << 16;   // PCD COUNT of one field
 inline constexpr uint64_t kMaxRecordBytes = 1 << 20;  // one point's bytes
 inline constexpr size_t kMaxPlyElements = 256;
 
+struct PlyScalar {
+  std::string name;
+  std::string type;  // as written: uchar or uint8, float or float32, ...
+};
+
 struct CheckedHeader {
   uint64_t points = 0;
   std::string encoding;  // PLY: ascii, binary_little_endian, binary_big_endian; PCD: ascii, binary, binary_compressed
+  // PLY: where the body starts, and the vertex element's properties (all scalars) in record order
+  // when it is the first element (else empty): what a reader of its own needs (ply_reader.h).
+  uint64_t body_offset = 0;
+  std::vector<PlyScalar> first_vertex_scalars;
 };
 
 StatusOr<CheckedHeader> CheckPlyHeader(const std::filesystem::path& path);

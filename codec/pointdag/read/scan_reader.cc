@@ -7,6 +7,7 @@
 
 #include "pointdag/read/las_reader.h"
 #include "pointdag/read/pcl_reader.h"
+#include "pointdag/read/ply_reader.h"
 
 namespace pointdag {
 
@@ -27,7 +28,9 @@ StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path
   std::fclose(f);
   if (got >= 4 && std::memcmp(magic, "LASF", 4) == 0) return LasReader::Open(path);  // LAZ too: LasReader hands it over
   if (got >= 4 && std::memcmp(magic, "ply", 3) == 0 && (magic[3] == '\n' || magic[3] == '\r')) {
-    return OpenPclScan(path, ScanFormat::kPly);
+    ASSIGN_OR_RETURN(const CheckedHeader header, CheckPlyHeader(path));
+    ASSIGN_OR_RETURN(std::unique_ptr<ScanReader> plain, OpenPlainPly(path, header));
+    return plain ? std::move(plain) : OpenPclScan(path, ScanFormat::kPly);
   }
   // PCD files open with a comment line or directly with VERSION/FIELDS.
   if (got >= 5 && (std::memcmp(magic, "# .PCD", 6) == 0 || std::memcmp(magic, "VERSION", 7) == 0 ||

@@ -1,7 +1,8 @@
 #include "pointdag/tile/tiler.h"
 
-#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <optional>
@@ -62,12 +63,12 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
     const VoxelGrid* level;
     size_t first, end;
   };
-  std::vector<VoxelGrid> levels;
-  levels.reserve(static_cast<size_t>(set.levels));
+  // The coarser levels averaged from the finest voxels; the finest level is `finest` itself, not a copy.
+  std::vector<VoxelGrid> coarser;
+  coarser.reserve(static_cast<size_t>(set.levels - 1));
   std::vector<Pending> pending;
   for (int l = 0; l < set.levels; ++l) {
-    levels.push_back(LevelGrid(finest, l, set.tile_depth));
-    const VoxelGrid& grid = levels.back();
+    const VoxelGrid& grid = l + 1 < set.levels ? coarser.emplace_back(LevelGrid(finest, l, set.tile_depth)) : finest;
     for (size_t i = 0; i < grid.morton.size();) {
       const uint64_t tile_code = grid.morton[i] >> local_bits;
       size_t j = i;
@@ -87,22 +88,31 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
   std::vector<Status> failures(pending.size());
   std::atomic<uint64_t> done{0};
   // The largest tile of each level goes first; the threshold its colors' target settled on is where
-  // the level's other tiles start (the same scan at the same scale: no sample to predict one).
-  std::vector<size_t> leads, rest;
+  // the level's other tiles start (the same scan at the same scale: no sample to predict one). A
+  // level's other tiles start as soon as its lead is done, not when every level's lead is: the cores
+  // do not idle behind the finest level's lead (the hints, hence the bytes, are the same).
+  std::vector<size_t> leads;
+  std::vector<std::vector<size_t>> rest(static_cast<size_t>(set.levels));
+  const auto size = [&](size_t k) { return pending[k].end - pending[k].first; };
   for (size_t t = 0; t < pending.size(); ++t) {
     const bool new_level = leads.empty() || pending[leads.back()].key.level != pending[t].key.level;
-    const auto size = [&](size_t k) { return pending[k].end - pending[k].first; };
+    auto& others = rest[static_cast<size_t>(pending[t].key.level)];
     if (new_level) {
       leads.push_back(t);
     } else if (size(t) > size(leads.back())) {
-      rest.push_back(leads.back());
+      others.push_back(leads.back());
       leads.back() = t;
     } else {
-      rest.push_back(t);
+      others.push_back(t);
     }
   }
-  std::vector<std::optional<double>> level_hint(static_cast<size_t>(set.levels)), encoded_hint(pending.size());
-  const auto encode_tile = [&](size_t t) {
+  // Spawned smallest first: a thread runs its own tasks last in, first out, so the largest start
+  // early, while idle threads steal the oldest (smallest) ones: the cores meet near the end.
+  const auto smaller = [&](size_t a, size_t b) { return size(a) != size(b) ? size(a) < size(b) : a > b; };
+  std::sort(leads.begin(), leads.end(), smaller);
+  for (auto& others : rest) std::sort(others.begin(), others.end(), smaller);
+  std::vector<std::optional<double>> encoded_hint(pending.size());
+  const auto encode_tile = [&](size_t t, std::optional<double> hint) {
     const Pending& p = pending[t];
     VoxelGrid grid;
     grid.depth = set.tile_depth;
@@ -115,7 +125,7 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
     for (size_t i = p.first; i < p.end; ++i) grid.morton.push_back(p.level->morton[i] & local_mask);
     if (p.level->has_color()) grid.colors.assign(p.level->colors.begin() + static_cast<long>(p.first), p.level->colors.begin() + static_cast<long>(p.end));
     EncodeOptions tile_options = encode;
-    tile_options.colors.threshold_hint = level_hint[static_cast<size_t>(p.key.level)];
+    tile_options.colors.threshold_hint = hint;
     auto encoded = EncodeGrid(std::move(grid), scan, source_name, tile_options);
     if (!encoded.ok()) {
       failures[t] = encoded.status();
@@ -127,9 +137,16 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
     const uint64_t finished = ++done;
     if (options.progress) options.progress(finished, pending.size());
   };
-  tbb::parallel_for(size_t{0}, leads.size(), [&](size_t k) { encode_tile(leads[k]); });
-  for (size_t t : leads) level_hint[static_cast<size_t>(pending[t].key.level)] = encoded_hint[t];
-  tbb::parallel_for(size_t{0}, rest.size(), [&](size_t k) { encode_tile(rest[k]); });
+  tbb::task_group group;
+  for (size_t lead : leads) {
+    group.run([&, lead] {
+      encode_tile(lead, std::nullopt);
+      for (size_t t : rest[static_cast<size_t>(pending[lead].key.level)]) {
+        group.run([&, t, hint = encoded_hint[lead]] { encode_tile(t, hint); });
+      }
+    });
+  }
+  group.wait();
   for (const Status& s : failures) RETURN_IF_ERROR(s);
   return set;
 }

@@ -8,6 +8,7 @@
 #include "pointdag/gpu/stage_device.h"
 #include "pointdag/gpu/voxel_reduce.h"
 #include "pointdag/voxelize/morton.h"
+#include "pointdag/voxelize/radix_sort.h"
 
 namespace pointdag {
 namespace {
@@ -52,9 +53,10 @@ uint8_t MeanChannel(uint64_t sum, uint64_t points, uint64_t divisor) {
   return static_cast<uint8_t>(std::min<uint64_t>((2 * sum + d) / (2 * d), 255));
 }
 
-void ReduceOnCpu(std::vector<KeyedPoint>& points, const ScanSurvey& survey, VoxelGrid& grid) {
-  // In place: a radix sort's scratch copy would double the peak memory of the whole pipeline.
-  std::sort(points.begin(), points.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
+void ReduceOnCpu(std::vector<KeyedPoint>& points, const ScanSurvey& survey, int key_bits, VoxelGrid& grid) {
+  // In place: a scratch copy would double the peak memory of the whole pipeline. The order among a
+  // voxel's points does not matter (integer sums), so any sort gives the same voxels.
+  RadixSortInPlace(std::span(points), key_bits, [](const KeyedPoint& p) { return p.key; });
   const uint64_t divisor = survey.color_bits > 8 ? 257 : 1;
   for (size_t begin = 0; begin < points.size();) {
     size_t end = begin + 1;
@@ -110,7 +112,7 @@ StatusOr<gpu::StageTiming> CalibrateVoxelize(gpu::VulkanContext& device) {
   timing.vulkan_seconds = seconds(start);
   grid = {};
   start = Clock::now();
-  ReduceOnCpu(points, survey, grid);
+  ReduceOnCpu(points, survey, 30, grid);
   timing.cpu_seconds = seconds(start);
   return timing;
 }
@@ -122,7 +124,7 @@ Status ReduceChunk(std::vector<KeyedPoint>& points, const ScanSurvey& survey, Vo
   if (device) {
     RETURN_IF_ERROR(ReduceOnDevice(*device, points, survey, 3 * grid.depth, grid));
   } else {
-    ReduceOnCpu(points, survey, grid);
+    ReduceOnCpu(points, survey, 3 * grid.depth, grid);
   }
   std::vector<KeyedPoint>().swap(points);  // give the points back before the chunk's DAG is built
   return on_chunk ? on_chunk(grid, first_voxel) : Status::Ok();
@@ -184,10 +186,14 @@ int ChunkLevels(uint64_t points, uint64_t max_in_memory, int depth) {
 }  // namespace
 
 StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options) {
-  if (options.voxel_size.has_value() == options.depth.has_value()) {
+  if (int{options.voxel_size.has_value()} + int{options.depth.has_value()} + int{bool(options.voxel_size_after_survey)} != 1) {
     return InvalidArgument("give exactly one of voxel size and depth");
   }
   ASSIGN_OR_RETURN(ScanSurvey survey, SurveyScan(reader, options.batch_points));
+  std::optional<double> voxel_size = options.voxel_size;
+  if (options.voxel_size_after_survey) {
+    ASSIGN_OR_RETURN(voxel_size, options.voxel_size_after_survey());
+  }
 
   VoxelGrid grid;
   grid.origin = survey.bounds.min;
@@ -203,8 +209,8 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
     grid.depth = *options.depth;
     grid.voxel_size = extent > 0 ? extent / std::ldexp(1.0, grid.depth) : 1.0;
   } else {
-    ASSIGN_OR_RETURN(grid.depth, DepthForVoxelSize(extent, *options.voxel_size));
-    grid.voxel_size = *options.voxel_size;
+    ASSIGN_OR_RETURN(grid.depth, DepthForVoxelSize(extent, *voxel_size));
+    grid.voxel_size = *voxel_size;
   }
   grid.chunk_levels = ChunkLevels(survey.points, std::max<uint64_t>(1, options.max_points_in_memory), grid.depth);
   const int chunk_shift = 3 * (grid.depth - grid.chunk_levels);

@@ -42,8 +42,11 @@ struct VoxelGrid;
 using ChunkFn = std::function<Status(const VoxelGrid& grid, size_t first_voxel)>;
 
 struct VoxelizeOptions {
-  std::optional<double> voxel_size;  // exactly one of voxel_size and depth
+  std::optional<double> voxel_size;  // exactly one of voxel_size, depth and voxel_size_after_survey
   std::optional<int> depth;
+  // A voxel size still being worked out (from the scan's spacing, beside the survey pass): asked for
+  // once the survey pass is done, the first moment it is needed.
+  std::function<StatusOr<double>()> voxel_size_after_survey;
   size_t batch_points = 1 << 14;
   uint64_t max_points_in_memory = uint64_t{1} << 25;
   std::filesystem::path spill_dir;  // where chunk files go; empty: the system's temporary folder

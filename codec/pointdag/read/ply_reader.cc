@@ -1,0 +1,138 @@
+#include "pointdag/read/ply_reader.h"
+
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <optional>
+#include <string_view>
+
+namespace pointdag {
+namespace {
+
+size_t TypeSize(std::string_view type) {
+  if (type == "char" || type == "int8" || type == "uchar" || type == "uint8") return 1;
+  if (type == "short" || type == "int16" || type == "ushort" || type == "uint16") return 2;
+  if (type == "double" || type == "float64") return 8;
+  return 4;  // int, uint, float and their sized names (CheckPlyHeader knows no other)
+}
+
+bool IsColorName(std::string_view name) {
+  return name == "rgb" || name == "rgba" || name == "red" || name == "green" || name == "blue" || name == "r" ||
+         name == "g" || name == "b" || name == "alpha" || name.starts_with("diffuse_");
+}
+
+// Byte offsets of what the reader takes from a record, when the layout is the plain one.
+struct Layout {
+  size_t record = 0;
+  size_t xyz[3] = {0, 0, 0};
+  bool xyz_double[3] = {false, false, false};
+  std::optional<size_t> rgb[3];
+};
+
+std::optional<Layout> PlainLayout(const CheckedHeader& header) {
+  if (header.encoding != "binary_little_endian" || std::endian::native != std::endian::little ||
+      header.first_vertex_scalars.empty()) {
+    return std::nullopt;
+  }
+  Layout layout;
+  bool has_xyz[3] = {false, false, false};
+  constexpr std::string_view kAxes[3] = {"x", "y", "z"}, kChannels[3] = {"red", "green", "blue"};
+  for (const PlyScalar& p : header.first_vertex_scalars) {
+    for (int a = 0; a < 3; ++a) {
+      if (p.name != kAxes[a]) continue;
+      if (p.type != "float" && p.type != "float32" && p.type != "double" && p.type != "float64") return std::nullopt;
+      layout.xyz[a] = layout.record;
+      layout.xyz_double[a] = TypeSize(p.type) == 8;
+      has_xyz[a] = true;
+    }
+    if (IsColorName(p.name)) {
+      int ch = 0;
+      while (ch < 3 && p.name != kChannels[ch]) ++ch;
+      if (ch == 3 || (p.type != "uchar" && p.type != "uint8")) return std::nullopt;
+      layout.rgb[ch] = layout.record;
+    }
+    layout.record += TypeSize(p.type);
+  }
+  const bool colors = layout.rgb[0] && layout.rgb[1] && layout.rgb[2];
+  if (!(has_xyz[0] && has_xyz[1] && has_xyz[2]) || (!colors && (layout.rgb[0] || layout.rgb[1] || layout.rgb[2]))) {
+    return std::nullopt;
+  }
+  return layout;
+}
+
+class PlainPlyReader final : public ScanReader {
+ public:
+  PlainPlyReader(std::FILE* file, const CheckedHeader& header, const Layout& layout)
+      : file_(file), body_offset_(header.body_offset), layout_(layout) {
+    info_.format = ScanFormat::kPly;
+    info_.format_version = header.encoding;
+    info_.point_count = header.points;
+    info_.has_color = layout.rgb[0].has_value();
+    info_.stored_color_bits = 8;
+  }
+  ~PlainPlyReader() override { std::fclose(file_); }
+
+  StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override {
+    batch.clear();
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.point_count - next_));
+    buffer_.resize(n * layout_.record);
+    if (std::fread(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
+      return Truncated("PLY data ends early, at point " + std::to_string(next_) + " of " + std::to_string(info_.point_count));
+    }
+    batch.xyz.resize(n);
+    if (info_.has_color) batch.rgb.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const unsigned char* record = buffer_.data() + i * layout_.record;
+      for (int axis = 0; axis < 3; ++axis) {
+        const unsigned char* at = record + layout_.xyz[axis];
+        double v;
+        if (layout_.xyz_double[axis]) {
+          std::memcpy(&v, at, 8);
+        } else {
+          float f;
+          std::memcpy(&f, at, 4);
+          v = f;
+        }
+        if (!std::isfinite(v)) return Malformed("point " + std::to_string(next_ + i) + " has a coordinate that is not finite");
+        batch.xyz[i][axis] = v;
+      }
+      if (info_.has_color) {
+        for (int ch = 0; ch < 3; ++ch) {
+          const uint16_t c = record[*layout_.rgb[ch]];
+          batch.rgb[i][ch] = c;
+          max_color_seen_ = std::max(max_color_seen_, c);
+        }
+      }
+    }
+    next_ += n;
+    return n;
+  }
+
+  Status Rewind() override {
+    if (std::fseek(file_, static_cast<long>(body_offset_), SEEK_SET) != 0) return IoError("cannot seek in the PLY file");
+    next_ = 0;
+    return Status::Ok();
+  }
+
+ private:
+  std::FILE* file_;
+  uint64_t body_offset_;
+  Layout layout_;
+  uint64_t next_ = 0;
+  std::vector<unsigned char> buffer_;
+};
+
+}  // namespace
+
+StatusOr<std::unique_ptr<ScanReader>> OpenPlainPly(const std::filesystem::path& path, const CheckedHeader& header) {
+  const std::optional<Layout> layout = PlainLayout(header);
+  if (!layout) return std::unique_ptr<ScanReader>();
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) return IoError("cannot open " + path.string());
+  auto reader = std::make_unique<PlainPlyReader>(file, header, *layout);
+  RETURN_IF_ERROR(reader->Rewind());
+  return std::unique_ptr<ScanReader>(std::move(reader));
+}
+
+}  // namespace pointdag
