@@ -11,28 +11,28 @@ namespace pointdag {
 namespace {
 
 // Estimated bits of weight w after weight `prev` of the same block, in 1/16ths, less those of
-// w = prev: by |w - prev| and the width, -log2 of the share of each distance (halved for the two
-// sides) in the weights coded on lion, guanyin and autzen at 34 and 42 dB with this choice on (its
-// fixed point: the table from error-minimizing weights gave sizes within 0.2 %; the scans agree
-// within ~0.5 bit). At 4 bits neighbours' weights differ by one step about as often as not.
+// w = prev: by |w - prev| and the width, the mean coded cost of the weights at each distance less
+// that at distance 0, measured in stream version 3 (whose context is the neighbours' colors, not
+// the previous weight: the costs are about half of version 2's) on lion, guanyin and autzen at 34
+// and 42 dB with this choice on, made non-decreasing.
 constexpr std::array<std::array<uint8_t, 16>, kMaxWeightBits + 1> kDistanceCost = {{
     {},
     {0, 16},
-    {0, 39, 85, 112},
-    {0, 28, 56, 78, 98, 116, 133, 146},
-    {0, 15, 31, 45, 55, 66, 76, 85, 94, 104, 111, 122, 127, 137, 148, 153},
+    {0, 25, 41, 46},
+    {0, 15, 29, 39, 45, 48, 48, 48},
+    {0, 7, 15, 22, 29, 35, 39, 41, 42, 44, 44, 44, 44, 44, 44, 44},
 }};
 
 constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
 
 }  // namespace
 
-// 0.7 x a color's allowed error (BlockError 3072 max_mse, block_codec.cc) per bit: lion, guanyin,
-// autzen, milk and IGN at 34-42 dB were smallest at equal PSNR-Y near 0.7 (1.0 cost IGN at 42 dB
-// 2.4 %, 2.5 cost lion at every target).
+// 1.0 x a color's allowed error (BlockError 3072 max_mse, block_codec.cc) per bit: with the table
+// above, lion, guanyin and autzen at 34-42 dB were smallest at equal PSNR-Y near 0.9-1.0 (a flat
+// optimum: 0.5-1.4 within ~0.5 %).
 uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
   if (array_colors < kMacroBlockColors || !(max_mse > 0)) return 0;
-  return static_cast<uint32_t>(std::min(max_mse * 3072.0 * 0.7, 4e9));
+  return static_cast<uint32_t>(std::min(max_mse * 3072.0, 4e9));
 }
 
 uint64_t ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {

@@ -2,9 +2,10 @@
 //
 // The weights of a block together minimize the sum of BlockError + price * (estimated bits of each
 // weight after the block's previous one), each weight within one step of the error-minimizing one
-// (ChooseWeight; a Viterbi search). The estimate is a static table of what the stream's adaptive
-// weight models (their context: the previous weight) learn, so that a block's weights depend on
-// that block alone: the threshold search (block_target.cc) measures the same
+// (ChooseWeight; a Viterbi search). The estimate is a static table of what a weight costs in stream
+// version 3 by its distance to the previous one (the true context, the neighbours' colors, lies in
+// other blocks), so that a block's weights depend on that block alone: the threshold search
+// (block_target.cc) measures the same
 // reconstruction the serializer stores and the decoder rebuilds. Price 0: every weight is
 // ChooseWeight's (the error-minimizing choice of stream versions 1 and 2's first writer). The
 // search also refits a priced block's endpoints for the weights chosen (RefitEnds), after the
