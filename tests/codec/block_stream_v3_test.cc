@@ -8,7 +8,6 @@
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/block_stream.h"
 #include "pointdag/color/color_codec.h"
-#include "pointdag/pipeline.h"
 #include "pointdag/voxelize/morton.h"
 #include "test_util.h"
 
@@ -124,20 +123,6 @@ TEST(BlockStreamV3, FuzzSeedsHoldTheVersionTwoSeedsColors) {
     ASSERT_TRUE(spatial.ok()) << spatial.status().ToString();
     EXPECT_EQ(spatial->DecodeAll(), colors) << name;
   }
-}
-
-// The compressed size of a fixed scan at a fixed setting, as color_test's CompressedSizesAreStable
-// (version 2 there: 8990 and 9157 bytes). A change here must be deliberate.
-TEST(BlockStreamV3, CompressedSizesAreStable) {
-  SKIP_WITHOUT_DATA();
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  auto scan = EncodeScan(testing::DataDir() / "autzen_trim_pdrf3_rgb.las", options);
-  ASSERT_TRUE(scan.ok());
-  const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
-  const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7861u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7804u);
 }
 
 }  // namespace

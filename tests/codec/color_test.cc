@@ -399,6 +399,10 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   // (2 power-iteration steps, no 1-bit merges); version 1 with the old fitter: 9596 and 9342.
   EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 8990u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9157u);
+  // Given the voxels' Morton codes, block stream version 3 (the weights' contexts from the decoded
+  // neighbours, block_stream_v3_test.cc).
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7861u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7804u);
   // Lossless version 2 (context coder): from neighbours found by Morton code, and from the previous
   // color alone (mipmap order). Version 1 (zstd differences) took 72993 bytes; 46558 before the radius-4 search for isolated voxels.
   const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};
