@@ -281,6 +281,16 @@ void WriteText(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
+// The scan opens, and its survey refuses it as malformed, naming point 1 (the second).
+void ExpectMalformedAtPointOne(const std::filesystem::path& path) {
+  auto reader = OpenScan(path);
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  const auto survey = SurveyScan(**reader);
+  ASSERT_FALSE(survey.ok());
+  EXPECT_EQ(survey.status().code(), StatusCode::kMalformed);
+  EXPECT_NE(survey.status().message().find("point 1"), std::string::npos) << survey.status().message();
+}
+
 TEST(PclReader, AsciiPlyWithDoubleCoordinatesAndFloatColors) {
   ScratchDir dir;
   WriteText(dir / "a.ply",
@@ -336,12 +346,7 @@ TEST(PclReader, PlyWithoutColorHasNoColor) {
 TEST(PclReader, NanCoordinateIsAnError) {
   ScratchDir dir;
   WriteXyzPly(dir / "nan.ply", {"1 2 3", "nan 2 3"});
-  auto reader = OpenScan(dir / "nan.ply");
-  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
-  const auto survey = SurveyScan(**reader);
-  ASSERT_FALSE(survey.ok());
-  EXPECT_EQ(survey.status().code(), StatusCode::kMalformed);
-  EXPECT_NE(survey.status().message().find("point 1"), std::string::npos) << survey.status().message();
+  ExpectMalformedAtPointOne(dir / "nan.ply");
 }
 
 TEST(PclReader, TruncatedBinaryPlyIsAnError) {
@@ -434,12 +439,7 @@ TEST(PlainPlyReader, NonFiniteCoordinateIsAnErrorNamingThePoint) {
                      "property float z\nend_header\n";
   for (float v : {1.0f, 2.0f, 3.0f, 1.0f, std::numeric_limits<float>::infinity(), 3.0f}) Put(text, v);
   WriteText(dir / "inf.ply", text);
-  auto reader = OpenScan(dir / "inf.ply");
-  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
-  const auto survey = SurveyScan(**reader);
-  ASSERT_FALSE(survey.ok());
-  EXPECT_EQ(survey.status().code(), StatusCode::kMalformed);
-  EXPECT_NE(survey.status().message().find("point 1"), std::string::npos) << survey.status().message();
+  ExpectMalformedAtPointOne(dir / "inf.ply");
 }
 
 TEST(PlainPlyReader, RealScansAsPclReadsThem) {
