@@ -142,7 +142,7 @@ TEST(BlockCodec, VersionOneStreamsStillDecode) {
     const auto v1 = *SerializeBlocksAsVersion(colors, blocks, layout, 1);
     const auto v2 = *SerializeBlocks(colors, blocks, layout);
     ASSERT_EQ(v1[0], 1);
-    ASSERT_EQ(v2[0], 2);  // without Morton codes (version 3 needs them: block_stream_v3_test.cc)
+    ASSERT_EQ(v2[0], 2);  // without Morton codes (versions 3 and 4 need them: block_stream_spatial_test.cc)
     auto old = BlockColorDecoder::Open(v1, colors.size());
     ASSERT_TRUE(old.ok()) << old.status().ToString();
     EXPECT_EQ(old->DecodeAll(), BlockColorDecoder::Open(v2, colors.size())->DecodeAll());
@@ -399,10 +399,12 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   // (2 power-iteration steps, no 1-bit merges); version 1 with the old fitter: 9596 and 9342.
   EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 8990u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9157u);
-  // Given the voxels' Morton codes, block stream version 3 (the weights' contexts from the decoded
-  // neighbours, block_stream_v3_test.cc).
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7861u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7804u);
+  // Given the voxels' Morton codes, block stream version 4 (the weights' contexts from the decoded
+  // neighbours, mixed with the previous weight's; endpoint A predicted from the neighbours:
+  // block_stream_spatial_test.cc). Version 3 (the neighbours' context alone, A from the previous
+  // block's): 7861 and 7804.
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7228u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7210u);
   // Lossless version 2 (context coder): from neighbours found by Morton code, and from the previous
   // color alone (mipmap order). Version 1 (zstd differences) took 72993 bytes; 46558 before the radius-4 search for isolated voxels.
   const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};

@@ -229,7 +229,7 @@ describe('geometry stream versions', () => {
 
 // Block color stream versions 1 (channel differences) and 2 still decode: the version 2 seeds hold
 // the version 1 seeds' decoded colors, re-encoded exactly, the version 3 seeds those of version 2
-// for the voxels 0..count-1 in Morton order (tests/codec/color_test.cc and block_stream_v3_test.cc
+// for the voxels 0..count-1 in Morton order (tests/codec/color_test.cc and block_stream_spatial_test.cc
 // check C++ alike); version 3 needs the voxels.
 describe('color stream versions', () => {
   test('vbr and fixed3 versions 1, 2 and 3 decode to the same colors', () => {

@@ -14,6 +14,7 @@
 
 #include "pointdag/color/block_stream.h"
 #include "pointdag/color/weight_choice.h"
+#include "pointdag/color/weight_mixer.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
@@ -223,20 +224,27 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
                                                         BlockLayout layout, uint8_t version, std::span<const uint64_t> morton) {
   if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
   if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
-    return InvalidArgument("color stream version 3 needs one Morton code per color");
+    return InvalidArgument("color stream version " + std::to_string(version) + " needs one Morton code per color");
   }
   const DifferenceCode code{version >= 2};
+  const bool mixed = version >= kFirstMixedVersion;
   std::optional<WeightContexts> spatial;
   if (version >= kFirstSpatialVersion) spatial.emplace(morton);
   std::vector<uint8_t> out = {version, static_cast<uint8_t>(layout), 0, 0};
   PutVarint(out, colors.size());
   PutVarint(out, blocks.size());
   auto models = std::make_unique<BlockModels>();
+  std::optional<WeightMixer> mixer;
+  if (mixed) mixer.emplace();
   BinaryRangeEncoder rc;
   uint64_t next = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
   std::vector<uint8_t> weights(kMacroBlockColors);
+  const auto encode_difference = [&](std::array<GammaModel, 3>& m, int dr, int dg, int db) {
+    const auto d = code.Components(dr, dg, db);
+    for (int c = 0; c < 3; ++c) EncodeGamma(rc, m[c], ZigZag(d[c]), code.MaxBits());
+  };
   for (const ColorBlock& b : blocks) {
     if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits ||
         b.start + b.length > colors.size()) {
@@ -246,17 +254,32 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
     EncodeGamma(rc, models->length[prev_bits], b.length, kLengthBits);
     if (layout == BlockLayout::kVariableRate) EncodeBitTree<3>(rc, models->width[prev_bits], b.bits);
     const Endpoints& e = b.ends;
-    const auto a = code.Components(e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
-    for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->a[c], ZigZag(a[c]), code.MaxBits());
+    const std::array<int, 3> span = {e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b};
+    if (mixed) {
+      // B - A first: the prediction of A aims the segment's middle at the neighbours' mean.
+      if (b.bits) encode_difference(models->b[b.bits], span[0], span[1], span[2]);
+      const BlockSurroundings near = spatial->Surroundings(b.start, b.length);
+      if (near.weight > 0) {
+        const auto p = PredictA(near, b.bits ? span : std::array<int, 3>{});
+        encode_difference(models->a_near, e.a.r - p[0], e.a.g - p[1], e.a.b - p[2]);
+      } else {
+        encode_difference(models->a, e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
+      }
+    } else {
+      encode_difference(models->a, e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
+      if (b.bits) encode_difference(models->b[b.bits], span[0], span[1], span[2]);
+    }
     if (b.bits) {
-      const auto ba = code.Components(e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b);
-      for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->b[b.bits][c], ZigZag(ba[c]), code.MaxBits());
       ChooseBlockWeights(colors, b, weights);
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = weights[i - b.start];
-        const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
-        EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
+        if (mixed) {
+          mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits), prev_w}, w);
+        } else {
+          const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
+          EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
+        }
         if (spatial) spatial->Record(i, Interpolate(b.ends, w, b.bits));
         prev_w = w;
       }

@@ -28,7 +28,7 @@ constexpr int BrickBit(int x, int y, int z) {
 }
 
 // A neighbour that may precede a voxel, seen from the voxel's cell in its brick: the brick it lies
-// in (slot of WeightContexts::near_), its bit there, and its weight (faces 4, edges 2, corners 1).
+// in (slot of a cursor's near bricks), its bit there, and its weight (faces 4, edges 2, corners 1).
 struct Neighbour {
   uint8_t slot, bit, weight;
 };
@@ -67,11 +67,20 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
     if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
     bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
   }
-  if (!bricks_.empty()) EnterBrick(0);
+  if (!bricks_.empty()) {
+    EnterBrick(weights_, 0);
+    ends_ = weights_;
+  }
 }
 
-void WeightContexts::EnterBrick(size_t k) {
-  current_ = k;
+void WeightContexts::Seek(Cursor& cursor, uint64_t i) const {
+  size_t k = cursor.current;
+  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
+  if (k != cursor.current) EnterBrick(cursor, k);
+}
+
+void WeightContexts::EnterBrick(Cursor& cursor, size_t k) const {
+  cursor.current = k;
   const uint64_t code = bricks_[k].code;
   for (int dx = -1; dx <= 1; ++dx) {
     uint64_t cx = code;
@@ -80,7 +89,7 @@ void WeightContexts::EnterBrick(size_t k) {
       uint64_t cy = cx;
       const bool y_ok = x_ok && Moved(cx, 1, dy, cy);
       for (int dz = -1; dz <= 1; ++dz) {
-        Brick& near = near_[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+        Brick& near = cursor.near[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
         near = {0, 0, 0};
         uint64_t c = cy;
         if (!y_ok || !Moved(cy, 2, dz, c) || c > code) continue;  // outside, or after this brick
@@ -96,30 +105,53 @@ void WeightContexts::EnterBrick(size_t k) {
   }
 }
 
-uint32_t WeightContexts::Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev) {
-  size_t k = current_;
-  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
-  if (k != current_) EnterBrick(k);
-
-  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
+template <typename F>
+void WeightContexts::ForEachPreceding(const Cursor& cursor, uint64_t i, F&& f) const {
   for (const Neighbour& n : kNeighbours[morton_[i] & 63]) {
-    const Brick& near = near_[n.slot];
+    const Brick& near = cursor.near[n.slot];
     if (n.weight == 0 || !(near.mask >> n.bit & 1)) continue;
-    const Rgb8 c = decoded_[near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1)))];
-    r += n.weight * c.r;
-    g += n.weight * c.g;
-    b += n.weight * c.b;
-    total += n.weight;
+    f(near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1))), n.weight);
   }
-  if (total == 0) return 16 + prev;
-  // Their mean's position on the segment A -> B in weight steps, rounded, clamped to 0..m (0 where
-  // A = B): one division per weight, not one per neighbour.
+}
+
+NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, int bits) {
+  Seek(weights_, i);
+  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
+  ForEachPreceding(weights_, i, [&](size_t j, int64_t weight) {
+    const Rgb8 c = decoded_[j];
+    r += weight * c.r;
+    g += weight * c.g;
+    b += weight * c.b;
+    total += weight;
+  });
+  if (total == 0) return {};
+  // Their mean's position on the segment A -> B in weight (half) steps, rounded, clamped to 0..m
+  // (0..2m; 0 where A = B): one division per weight, not one per neighbour.
   const int64_t m = (1 << bits) - 1;
   const int64_t sr = ends.b.r - ends.a.r, sg = ends.b.g - ends.a.g, sb = ends.b.b - ends.a.b;
   const int64_t len2 = sr * sr + sg * sg + sb * sb;
   const int64_t dot = (r - total * ends.a.r) * sr + (g - total * ends.a.g) * sg + (b - total * ends.a.b) * sb;
-  if (dot <= 0 || len2 == 0) return 0;
-  return static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / (2 * total * len2)));
+  if (dot <= 0 || len2 == 0) return {true, 0, 0};
+  const int64_t unit = 2 * total * len2;
+  return {true, static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / unit)),
+          static_cast<uint32_t>(std::min(2 * m, (4 * dot * m + total * len2) / unit))};
+}
+
+BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) {
+  BlockSurroundings s;
+  const uint64_t stop = start + std::min(length, kPredictingVoxels);
+  for (uint64_t i = start; i < stop; ++i) {
+    Seek(ends_, i);
+    ForEachPreceding(ends_, i, [&](size_t j, int64_t weight) {
+      if (j >= start) return;  // inside the block: not decoded yet
+      const Rgb8 c = decoded_[j];
+      s.r += weight * c.r;
+      s.g += weight * c.g;
+      s.b += weight * c.b;
+      s.weight += weight;
+    });
+  }
+  return s;
 }
 
 }  // namespace pointdag

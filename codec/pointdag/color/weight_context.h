@@ -34,16 +34,40 @@ namespace pointdag {
 // 16 = the first of a block) without neighbours.
 constexpr int kSpatialWeightContexts = 33;
 
+// Where the decoded neighbours' mean color lies on a block's segment A -> B, rounded to its weight
+// steps (0..m, m = 2^bits - 1) and to half steps (0..2m); `found` false without such neighbours.
+struct NeighbourPosition {
+  bool found = false;
+  uint32_t step = 0, half_step = 0;
+};
+
+// The neighbours that precede a block (stream version 4's endpoint prediction): the weighted sum
+// of their decoded colors and of their weights, each neighbour counted once per voxel of the block
+// it touches (the block's first kPredictingVoxels voxels).
+struct BlockSurroundings {
+  int64_t r = 0, g = 0, b = 0, weight = 0;
+};
+constexpr uint32_t kPredictingVoxels = 64;
+
 class WeightContexts {
  public:
   // `morton`: one code per color, sorted and unique (as decoded geometry enumerates the voxels);
   // must outlive this object.
   explicit WeightContexts(std::span<const uint64_t> morton);
 
-  // The context of color i's weight in a block of `ends` and `bits` (1..4) per weight, `prev` the
-  // previous weight of the same block (16 at its first). Colors before i must be recorded; i
-  // never decreases from one call to the next.
-  uint32_t Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev);
+  // Where color i's preceding neighbours lie on the segment of a block of `ends` and `bits` (1..4)
+  // per weight. Colors before i must be recorded; i never decreases from one call to the next.
+  NeighbourPosition Position(uint64_t i, const Endpoints& ends, int bits);
+  // Version 3's context of color i's weight: Position's step, else 16 + `prev`, the previous weight
+  // of the same block (16 at its first).
+  uint32_t Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev) {
+    const NeighbourPosition p = Position(i, ends, bits);
+    return p.found ? p.step : 16 + prev;
+  }
+  // The decoded neighbours of the block of colors [start, start + length) that precede it. Colors
+  // before `start` must be recorded; `start` never decreases from one call to the next, and is at
+  // least the last Position's i.
+  BlockSurroundings Surroundings(uint64_t start, uint32_t length);
   // Color i as decoded.
   void Record(uint64_t i, const Rgb8& c) { decoded_[i] = c; }
 
@@ -53,15 +77,23 @@ class WeightContexts {
     uint32_t start;  // index of its first voxel
     uint64_t mask;   // bit (Morton code & 63) per voxel
   };
-  // Brick k becomes the current one: near_ gets its neighbour bricks that precede it (and itself),
-  // by offset (dx + 1) * 9 + (dy + 1) * 3 + dz + 1 (its slot), with an empty mask elsewhere.
-  void EnterBrick(size_t k);
+  // A walk forward through the bricks: `near` holds brick `current`'s neighbour bricks that precede
+  // it (and itself), by offset (dx + 1) * 9 + (dy + 1) * 3 + dz + 1 (its slot), with an empty mask
+  // elsewhere. Weights and endpoints each walk with their own.
+  struct Cursor {
+    size_t current = 0;
+    std::array<Brick, 27> near{};
+  };
+  void Seek(Cursor& cursor, uint64_t i) const;
+  void EnterBrick(Cursor& cursor, size_t k) const;
+  // Calls f(neighbour index, weight) for each neighbour of color i that may precede it.
+  template <typename F>
+  void ForEachPreceding(const Cursor& cursor, uint64_t i, F&& f) const;
 
   std::span<const uint64_t> morton_;
   std::vector<Rgb8> decoded_;
   std::vector<Brick> bricks_;
-  size_t current_ = 0;
-  std::array<Brick, 27> near_{};
+  Cursor weights_, ends_;
 };
 
 }  // namespace pointdag
