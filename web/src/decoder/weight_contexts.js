@@ -1,5 +1,5 @@
-// Spatial contexts of the block color stream's weights (version 3, leaf mode), computed as
-// codec/pointdag/color/weight_context.cc WeightContexts::Of computes them: the mean of the decoded
+// Spatial contexts of the block color stream's weights (versions 3 and 4, leaf mode), computed as
+// codec/pointdag/color/weight_context.cc WeightContexts computes them: the mean of the decoded
 // colors of the voxel's face, edge and corner neighbours that precede it in Morton order (weighted
 // 4 / 2 / 1 for faces / edges / corners), projected onto the current block's segment A -> B and
 // rounded to its weight steps; 16 + the previous weight without such neighbours. Neighbours are
@@ -7,6 +7,9 @@
 
 // Contexts per weight width (kSpatialWeightContexts).
 export const SPATIAL_WEIGHT_CONTEXTS = 33;
+
+// Voxels of a block whose neighbours predict its endpoint A (kPredictingVoxels, version 4).
+const PREDICTING_VOXELS = 64;
 
 // The neighbour offsets that can precede a voxel in Morton order, with their weights: the code
 // grows with each coordinate, so the 7 offsets with no negative component never do.
@@ -49,8 +52,10 @@ export class WeightContexts {
     return -1;
   }
 
-  // The context of color i's weight; `decoded` holds the colors before i (RGB per color).
-  of(i, decoded, ar, ag, ab, br, bg, bb, bits, prev) {
+  // Where color i's preceding neighbours' mean color lies on the segment A -> B of a block with
+  // `bits` per weight (Position in weight_context.cc): -1 without such neighbours, else
+  // (step << 8) | half step. `decoded` holds the colors before i (RGB per color).
+  position(i, decoded, ar, ag, ab, br, bg, bb, bits) {
     const x = this.coords[3 * i], y = this.coords[3 * i + 1], z = this.coords[3 * i + 2];
     let r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
     for (let k = 0; k < OFFSETS.length; k += 4) {
@@ -64,12 +69,41 @@ export class WeightContexts {
       b += weight * decoded[3 * j + 2];
       total += weight;
     }
-    if (total === 0) return 16 + prev;
+    if (total === 0) return -1;
     const m = (1 << bits) - 1;
     const sr = br - ar, sg = bg - ag, sb = bb - ab;
     const len2 = sr * sr + sg * sg + sb * sb;
     const dot = (r - total * ar) * sr + (g - total * ag) * sg + (b - total * ab) * sb;
     if (dot <= 0 || len2 === 0) return 0;
-    return Math.min(m, Math.floor((2 * dot * m + total * len2) / (2 * total * len2)));
+    const unit = 2 * total * len2;
+    return (Math.min(m, Math.floor((2 * dot * m + total * len2) / unit)) << 8) | Math.min(2 * m, Math.floor((4 * dot * m + total * len2) / unit));
+  }
+
+  // Version 3's context of color i's weight: the neighbours' step, else 16 + `prev`.
+  of(i, decoded, ar, ag, ab, br, bg, bb, bits, prev) {
+    const p = this.position(i, decoded, ar, ag, ab, br, bg, bb, bits);
+    return p < 0 ? 16 + prev : p >> 8;
+  }
+
+  // The block of colors [start, start + length)'s preceding neighbours (Surroundings in
+  // weight_context.cc): of its first PREDICTING_VOXELS voxels, the neighbours decoded before
+  // `start`, their weighted colors summed into sums[0..2] and their weights into sums[3].
+  surroundings(start, length, decoded, sums) {
+    sums.fill(0);
+    const stop = start + Math.min(length, PREDICTING_VOXELS);
+    for (let i = start; i < stop; ++i) {
+      const x = this.coords[3 * i], y = this.coords[3 * i + 1], z = this.coords[3 * i + 2];
+      for (let k = 0; k < OFFSETS.length; k += 4) {
+        const nx = x + OFFSETS[k], ny = y + OFFSETS[k + 1], nz = z + OFFSETS[k + 2];
+        if (nx < 0 || ny < 0 || nz < 0) continue;
+        const j = this.find(nx, ny, nz);
+        if (j < 0 || j >= start) continue;  // absent, or not decoded before the block
+        const weight = OFFSETS[k + 3];
+        sums[0] += weight * decoded[3 * j];
+        sums[1] += weight * decoded[3 * j + 1];
+        sums[2] += weight * decoded[3 * j + 2];
+        sums[3] += weight;
+      }
+    }
   }
 }
