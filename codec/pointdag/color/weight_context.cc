@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cstddef>
+#include <cstdint>
 
 namespace pointdag {
 namespace {
@@ -67,19 +68,26 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
     if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
     bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
   }
+  for (Cursor& c : recent_) c.current = SIZE_MAX;
   if (!bricks_.empty()) {
     EnterBrick(weights_, 0);
     ends_ = weights_;
   }
 }
 
-void WeightContexts::Seek(Cursor& cursor, uint64_t i) const {
+void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
   size_t k = cursor.current;
   while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
   if (k != cursor.current) EnterBrick(cursor, k);
 }
 
-void WeightContexts::EnterBrick(Cursor& cursor, size_t k) const {
+void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
+  for (const Cursor& c : recent_) {
+    if (c.current == k) {
+      cursor = c;
+      return;
+    }
+  }
   cursor.current = k;
   const uint64_t code = bricks_[k].code;
   for (int dx = -1; dx <= 1; ++dx) {
@@ -103,6 +111,8 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) const {
       }
     }
   }
+  recent_[next_recent_] = cursor;
+  next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
 template <typename F>

@@ -84,8 +84,8 @@ class WeightContexts {
     size_t current = 0;
     std::array<Brick, 27> near{};
   };
-  void Seek(Cursor& cursor, uint64_t i) const;
-  void EnterBrick(Cursor& cursor, size_t k) const;
+  void Seek(Cursor& cursor, uint64_t i);
+  void EnterBrick(Cursor& cursor, size_t k);
   // Calls f(neighbour index, weight) for each neighbour of color i that may precede it.
   template <typename F>
   void ForEachPreceding(const Cursor& cursor, uint64_t i, F&& f) const;
@@ -94,6 +94,9 @@ class WeightContexts {
   std::vector<Rgb8> decoded_;
   std::vector<Brick> bricks_;
   Cursor weights_, ends_;
+  // The bricks most recently entered by either cursor: the other enters the same ones soon after.
+  std::array<Cursor, 8> recent_{};
+  size_t next_recent_ = 0;
 };
 
 }  // namespace pointdag
