@@ -81,11 +81,14 @@ std::vector<Candidate> Singletons(uint32_t count) {
   return blocks;
 }
 
-// Bits a block costs in the range-coded stream, roughly: header, second endpoint, weights (which the
-// context model codes at ~0.8 of their width). Calibrated on lion at 1 cm; the cut is not sensitive
-// to it (within 2% of file size across the variants tried).
-// In fifths of a bit, so that the cut is integer arithmetic (the Vulkan port cuts alike).
-uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 4; }
+// What the cut weighs a block by: header 30 bits, second endpoint 30, each weight bit 0.4. Not the
+// stream's cost (block stream version 4 spends ~23, ~20 and 0.45-0.7 bits): the threshold search
+// undoes what the cut does, and keeping longer blocks with more weight bits measured smaller at
+// equal PSNR-Y. Weight bit 0.8 (before stream version 4): VBR at 34/38/42 dB 3-12 % larger on lion,
+// guanyin, autzen, milk and IGN at 25 cm; 0.6: 1-5 % larger; 0.2 (with a 60-bit header): smaller
+// still but chroma 1-5 dB lower (docs/benchmarks.md). In fifths of a bit, so that the cut is integer
+// arithmetic (the Vulkan port cuts alike: gpu/shaders/block_common.glsl).
+uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 2; }
 
 // The first level of the tree above the leaves that merges blocks; the levels below it keep the
 // leaves (refitted, never kept by the cut: more bits for the same length cost more). The cut kept
