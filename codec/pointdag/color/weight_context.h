@@ -1,5 +1,7 @@
-// Spatial contexts for the block color stream's weights (stream version 3, leaf mode;
+// Spatial contexts for the block color stream's weights (stream versions 3 and 4, leaf mode;
 // proto/PDAG_FORMAT.md §3), shared by its writer (SerializeBlocks) and reader (BlockColorDecoder::Open).
+// Version 4 also takes the position in half steps (weight_mixer.h) and predicts a block's endpoint A
+// from the decoded neighbours around its first voxels (Surroundings; PredictA in block_stream.h).
 //
 // Colors are one per voxel in Morton order, so of a voxel's 26 face, edge and corner neighbours
 // those with a lower Morton code are decoded before it. The mean of their decoded colors (faces
@@ -18,7 +20,8 @@
 // brick, and which cells a voxel's preceding neighbours are comes from a table per cell. Whole-file
 // decode of lion 1 cm at 38 dB (DecodePdag, one core): version 2 52 ms; version 3 with a hash table
 // of the codes (as the lossless colors use) 114 ms, with bricks 106, with the table and one
-// projection per weight (not per neighbour) 88.
+// projection per weight (not per neighbour) 88. Version 4 walks the bricks twice (the endpoints' walk
+// runs ahead of the weights'), sharing the bricks last entered.
 #pragma once
 
 #include <array>
