@@ -278,7 +278,7 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = weights[i - b.start];
         if (mixed) {
-          mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits), prev_w}, w);
+          mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits, true), prev_w}, w);
         } else {
           const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
           EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);

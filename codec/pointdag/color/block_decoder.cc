@@ -114,7 +114,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     for (uint32_t i = 0; bits && i < length; ++i) {
       uint32_t w;
       if (mixed) {
-        w = mixer->Decode(rc, bits, {spatial->Position(next + i, ends, bits), prev_w});
+        w = mixer->Decode(rc, bits, {spatial->Position(next + i, ends, bits, true), prev_w});
       } else {
         const uint32_t context = spatial ? spatial->Of(next + i, ends, bits, prev_w) : prev_w;
         w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][context], bits);

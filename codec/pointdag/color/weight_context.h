@@ -38,9 +38,10 @@ namespace pointdag {
 constexpr int kSpatialWeightContexts = 33;
 
 // Where the decoded neighbours' mean color lies on a block's segment A -> B, rounded to its weight
-// steps (0..m, m = 2^bits - 1) and to half steps (0..2m); `found` false without such neighbours.
+// steps (0..m, m = 2^bits - 1) and to half steps (0..2m); `found` false without such neighbours,
+// `far` where they are the cells two away (none of the 26 around precedes).
 struct NeighbourPosition {
-  bool found = false;
+  bool found = false, far = false;
   uint32_t step = 0, half_step = 0;
 };
 
@@ -59,12 +60,13 @@ class WeightContexts {
   explicit WeightContexts(std::span<const uint64_t> morton);
 
   // Where color i's preceding neighbours lie on the segment of a block of `ends` and `bits` (1..4)
-  // per weight. Colors before i must be recorded; i never decreases from one call to the next.
-  NeighbourPosition Position(uint64_t i, const Endpoints& ends, int bits);
+  // per weight; with `far`, where none of the 26 around it precedes it, the preceding cells two
+  // away (version 4). Colors before i must be recorded; i never decreases from one call to the next.
+  NeighbourPosition Position(uint64_t i, const Endpoints& ends, int bits, bool far);
   // Version 3's context of color i's weight: Position's step, else 16 + `prev`, the previous weight
   // of the same block (16 at its first).
   uint32_t Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev) {
-    const NeighbourPosition p = Position(i, ends, bits);
+    const NeighbourPosition p = Position(i, ends, bits, false);
     return p.found ? p.step : 16 + prev;
   }
   // The decoded neighbours of the block of colors [start, start + length) that precede it. Colors
@@ -89,9 +91,10 @@ class WeightContexts {
   };
   void Seek(Cursor& cursor, uint64_t i);
   void EnterBrick(Cursor& cursor, size_t k);
-  // Calls f(neighbour index, weight) for each neighbour of color i that may precede it.
-  template <typename F>
-  void ForEachPreceding(const Cursor& cursor, uint64_t i, F&& f) const;
+  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbours
+  // by its bit in the brick) that precedes it.
+  template <typename Table, typename F>
+  void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
 
   std::span<const uint64_t> morton_;
   std::vector<Rgb8> decoded_;

@@ -2,17 +2,21 @@
 // is coded with a logistic mix (entropy/logistic.h, as the geometry's mask mixer) of four models
 // instead of version 3's one. Each model is chosen by the width and the bit tree's node, and by:
 //   1. version 3's context: the decoded neighbours' mean position on the block's segment in weight
-//      steps (0..15), else 16 + the previous weight of the block;
-//   2. that position in half steps (0..30), else 31 + the previous weight: whether the neighbours'
-//      mean lies near a step or between two;
+//      steps (0..15), else 16 + the previous weight of the block, and 33 + the position where the
+//      neighbours are the cells two away (none of the 26 around precedes: 30 % of guanyin's
+//      weights, 3-6 % of lion's and autzen's);
+//   2. that position in half steps (0..30), else 31 + the previous weight, 48 + the position two
+//      away: whether the neighbours' mean lies near a step or between two;
 //   3. the previous weight of the block (0..16, 16 = the first): version 2's context;
 //   4. the position in steps and how the previous weight relates to it (first, equal, below,
-//      above), else 64 + the previous weight.
+//      above), else 64 + the previous weight, 81 + those two away.
 // The mixer learns a weight per model (and a bias) for each width and depth in the bit tree.
 // Measured on the blocks of lion 1 cm, guanyin 2 mm and autzen 4 ft at 34 and 42 dB: weight bits
 // 2-15 % below version 3's (most at low rates); one model alone as version 3 but learning fast while
 // young 0.3-2 %; a fifth model (the two previous weights, the neighbours' spread, the face
-// neighbours' own steps, or steps extrapolated from two voxels per axis) at most 1 % more.
+// neighbours' own steps, or steps extrapolated from two voxels per axis) at most 1 % more. The
+// cells two away where none of the 26 precedes: guanyin's weights 4-5 % fewer bits, lion's and
+// autzen's 0.3-0.9 %.
 #pragma once
 
 #include <array>
@@ -47,7 +51,7 @@ class WeightMixer {
 
  private:
   static constexpr int kInputs = 4;
-  static constexpr int kStepContexts = 33, kHalfContexts = 48, kPreviousContexts = 17, kRelationContexts = 81;
+  static constexpr int kStepContexts = 49, kHalfContexts = 79, kPreviousContexts = 17, kRelationContexts = 145;
   static constexpr int32_t kBias = 256;
   static constexpr int32_t kMaxWeight = 1 << 22;
   // The first model starts trusted alone at 1, the others at 0.3 (the bias at 0), as the mask mixer's.
@@ -59,11 +63,12 @@ class WeightMixer {
     const uint32_t prev = c.prev;
     const uint32_t step = c.near.step;
     const uint32_t relation = prev == 16 ? 0 : prev == step ? 1 : prev < step ? 2 : 3;
+    const bool near = c.near.found && !c.near.far, far = c.near.far;
     const std::array<uint32_t, kInputs> rows = {
-        static_cast<uint32_t>(bits * kStepContexts) + (c.near.found ? step : 16 + prev),
-        static_cast<uint32_t>(bits * kHalfContexts) + (c.near.found ? c.near.half_step : 31 + prev),
+        static_cast<uint32_t>(bits * kStepContexts) + (near ? step : far ? 33 + step : 16 + prev),
+        static_cast<uint32_t>(bits * kHalfContexts) + (near ? c.near.half_step : far ? 48 + c.near.half_step : 31 + prev),
         static_cast<uint32_t>(bits * kPreviousContexts) + prev,
-        static_cast<uint32_t>(bits * kRelationContexts) + (c.near.found ? step * 4 + relation : 64 + prev),
+        static_cast<uint32_t>(bits * kRelationContexts) + (near ? step * 4 + relation : far ? 81 + step * 4 + relation : 64 + prev),
     };
     uint32_t node = 1;
     for (int i = bits - 1; i >= 0; --i) {

@@ -137,7 +137,7 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
       for (let i = 0; i < length; ++i, o += 3) {
         let w;
         if (mixed) {
-          w = mixer.decode(rc, bits, spatial.position(next + i, out, ar, ag, ab, br, bg, bb, bits), prevW);
+          w = mixer.decode(rc, bits, spatial.position(next + i, out, ar, ag, ab, br, bg, bb, bits, true), prevW);
         } else {
           const context = spatial ? spatial.of(next + i, out, ar, ag, ab, br, bg, bb, bits, prevW) : prevW;
           w = rc.bitTree(p, wBase + context * WEIGHT_TREE, bits);

@@ -1,18 +1,19 @@
 // Block color stream version 4's weights (proto/PDAG_FORMAT.md §3), as
 // codec/pointdag/color/weight_mixer.h codes them, bit for bit: each bit of a weight's bit tree from
 // a logistic mix of four young models chosen by (width, node) and by the neighbours' position in
-// steps (else 16 + the previous weight), in half steps (else 31 + previous), the previous weight,
-// and the position in steps with the previous weight's relation to it (else 64 + previous);
-// mixer weights per (width, depth in the tree).
+// steps (else 16 + the previous weight; 33 + it for the cells two away), in half steps (else 31 +
+// previous; 48 + it two away), the previous weight, and the position in steps with the previous
+// weight's relation to it (else 64 + previous; 81 + them two away); mixer weights per (width,
+// depth in the tree).
 import { STRETCH, squash } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
 const MAX_WEIGHT_BITS = 4;
 const NODES = 1 << MAX_WEIGHT_BITS;
-const STEP_CONTEXTS = 33;
-const HALF_CONTEXTS = 48;
+const STEP_CONTEXTS = 49;
+const HALF_CONTEXTS = 79;
 const PREVIOUS_CONTEXTS = 17;
-const RELATION_CONTEXTS = 81;
+const RELATION_CONTEXTS = 145;
 const INPUTS = 4;
 const BIAS = 256;
 const MAX_WEIGHT = 1 << 22;
@@ -39,15 +40,18 @@ export class WeightMixer {
   }
 
   // Decodes a weight of `bits` bits; `position`: WeightContexts.position's result (-1 without
-  // neighbours, else step << 8 | half step); `prev`: the previous weight of the block (16 at its first).
+  // neighbours, else far << 16 | step << 8 | half step); `prev`: the previous weight of the block
+  // (16 at its first).
   decode(rc, bits, position, prev) {
-    const found = position >= 0;
-    const step = found ? position >> 8 : 0;
+    const far = position >= 0 && position >> 16 === 1;
+    const near = position >= 0 && !far;
+    const step = position >= 0 ? (position >> 8) & 0xff : 0;
+    const half = position & 0xff;
     const relation = prev === 16 ? 0 : prev === step ? 1 : prev < step ? 2 : 3;
-    const r0 = (bits * STEP_CONTEXTS + (found ? step : 16 + prev)) * NODES;
-    const r1 = (bits * HALF_CONTEXTS + (found ? position & 0xff : 31 + prev)) * NODES;
+    const r0 = (bits * STEP_CONTEXTS + (near ? step : far ? 33 + step : 16 + prev)) * NODES;
+    const r1 = (bits * HALF_CONTEXTS + (near ? half : far ? 48 + half : 31 + prev)) * NODES;
     const r2 = (bits * PREVIOUS_CONTEXTS + prev) * NODES;
-    const r3 = (bits * RELATION_CONTEXTS + (found ? step * 4 + relation : 64 + prev)) * NODES;
+    const r3 = (bits * RELATION_CONTEXTS + (near ? step * 4 + relation : far ? 81 + step * 4 + relation : 64 + prev)) * NODES;
     const { step: a, half: b, previous: c, relation: d } = this;
     const w = this.w;
     let node = 1;
