@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <memory>
-#include <optional>
 
-#include "pointdag/color/causal_neighbours.h"
 #include "pointdag/color/lossless_mixing.h"
 #include "pointdag/color/lossless_predict.h"
 #include "pointdag/entropy/adaptive_codes.h"
@@ -22,65 +20,6 @@ constexpr uint8_t kModePrevious = 0, kModeNeighbours = 1;
 constexpr uint64_t kMaxColorsPerByte = 8192;
 constexpr int kMaxGammaLength = 9;  // zigzag residuals of -128..127 are 1..256
 
-constexpr int kRadius = 2, kFarRadius = 4;
-
-// Beyond kRadius, for voxels with nothing nearer: max(1, 64 / d²) (d² from 9 to 3·kFarRadius²).
-constexpr Weights kFar = [] {
-  Weights w{};
-  for (size_t d2 = 9; d2 < w.size(); ++d2) w[d2] = std::max<int>(1, static_cast<int>(64 / d2));
-  return w;
-}();
-
-// The prediction of color i from colors [0, i), which both sides know. Both weightings are tried
-// on every voxel; the one that missed less on the adjacent decoded voxels predicts the next.
-class Predictor {
- public:
-  explicit Predictor(std::span<const uint64_t> morton) {
-    if (!morton.empty()) {
-      neighbours_.emplace(morton);
-      misses_.resize(morton.size());
-    }
-  }
-  Prediction operator()(std::span<const Rgb8> colors, size_t i) {
-    Gather& gather = gather_;  // a member: its array is not cleared per voxel
-    gather.Clear();
-    const auto add = [&gather](size_t j, int d2) { gather.Add(j, d2); };
-    if (neighbours_) {
-      neighbours_->ForEach(i, 0, kRadius, add);
-      near_ = gather.Predict(colors, kNear);
-      wide_ = gather.Predict(colors, kWide);
-      int near_miss = 0, wide_miss = 0;
-      for (size_t k = 0; k < gather.size(); ++k) {
-        if (gather[k].second > 3) continue;
-        near_miss += misses_[gather[k].first][0];
-        wide_miss += misses_[gather[k].first][1];
-      }
-      const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
-      if (!best.none) return best;
-      neighbours_->ForEach(i, kRadius, kFarRadius, add);
-      const Prediction far = gather.Predict(colors, kFar);
-      if (!far.none) return far;
-    }
-    Prediction p;
-    if (i > 0) {
-      const Rgb8 c = colors[i - 1];
-      p = {c.g, c.r - c.g, c.b - c.g, 0, 0, 0, true};  // a weaker guess: its own contexts
-    }
-    return p;
-  }
-  // After color i is known: how far each weighting was from it.
-  void Record(size_t i, const Rgb8& c) {
-    if (misses_.empty()) return;
-    misses_[i] = {static_cast<uint16_t>(near_.none ? 0 : Miss(near_, c)), static_cast<uint16_t>(wide_.none ? 0 : Miss(wide_, c))};
-  }
-
- private:
-  std::optional<CausalNeighbours> neighbours_;
-  std::vector<std::array<uint16_t, 2>> misses_;
-  Prediction near_, wide_;
-  Gather gather_;
-};
-
 constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;
 
 struct Models {
@@ -93,7 +32,7 @@ struct Models {
 template <class Io>
 void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
   auto models = std::make_unique<Models>();
-  Predictor predict(morton);
+  Predictor predict(morton, 2);
   Share share_r, share_b;
   for (size_t i = 0; i < colors.size(); ++i) {
     const Prediction p = predict(colors, i);

@@ -3,119 +3,13 @@
 #include <algorithm>
 #include <array>
 #include <memory>
-#include <optional>
-#include <utility>
 
-#include "pointdag/color/causal_neighbours.h"
 #include "pointdag/color/lossless_predict.h"
 #include "pointdag/entropy/binary_range_coder.h"
 #include "pointdag/entropy/logistic.h"
 
 namespace pointdag::lossless {
 namespace {
-
-// With fewer decoded neighbours than this within ±2, those within ±4 join them (IGN 0.1 m: half
-// its voxels have none within ±2).
-constexpr int kRadius = 2, kFarRadius = 4, kFewNeighbours = 4;
-
-// The wide weighting reaching ±4: 64 times version 2's within ±2, 512 / d² beyond.
-constexpr Weights kWideFar = [] {
-  Weights w{};
-  for (size_t d2 = 1; d2 < w.size(); ++d2) w[d2] = kWide[d2] > 0 ? 64 * kWide[d2] : static_cast<int>(512 / d2);
-  return w;
-}();
-
-// The mean (G, R-G, B-G) of the decoded voxels in the smallest cell of 8^3 voxels or more (Morton
-// code >> 3L, L >= 3) around voxel i that holds any: a voxel with no neighbour within ±4 is better
-// predicted by it than by the previous color (tiny at 8 ft: 97 % of its voxels, colors -2.2 %;
-// larger cells first measured worse everywhere else).
-class CellMeans {
- public:
-  explicit CellMeans(std::span<const uint64_t> morton) : morton_(morton) {}
-  // Voxel i's turn: the cells that begin with it start counting.
-  void Enter(size_t i) {
-    for (int l = kFirstLevel; l <= kMaxDepth; ++l) {
-      if (i > 0 && morton_[i] >> (3 * l) == morton_[i - 1] >> (3 * l)) break;  // so are the larger ones
-      start_[l] = {i, sum_};
-    }
-  }
-  void Add(const Rgb8& c) { sum_ = {sum_[0] + c.g, sum_[1] + c.r - c.g, sum_[2] + c.b - c.g}; }
-  // Before voxel i; none when nothing is decoded.
-  Prediction Before(size_t i) const {
-    Prediction p;
-    for (int l = kFirstLevel; l <= kMaxDepth; ++l) {
-      const auto& [first, at] = start_[l];
-      const int64_t n = static_cast<int64_t>(i - first);
-      if (n == 0) continue;
-      const auto mean = [n](int64_t sum) { return static_cast<int>((sum + n / 2) / n); };
-      p = {mean(sum_[0] - at[0]), mean(sum_[1] - at[1]), mean(sum_[2] - at[2]), 0, 0, 0, true};
-      break;
-    }
-    return p;
-  }
-
- private:
-  static constexpr int kFirstLevel = 3;
-  std::span<const uint64_t> morton_;
-  std::array<int64_t, 3> sum_{};  // of colors 0..i-1
-  std::array<std::pair<size_t, std::array<int64_t, 3>>, kMaxDepth + 1> start_{};  // per level: first voxel, sum_ there
-};
-
-// The prediction of color i from colors [0, i): near and wide weightings, the one that missed less
-// on the adjacent decoded voxels predicting (as version 2); with no neighbour within ±4, the
-// decoded voxels' mean in the smallest cell around that holds any (CellMeans).
-class Predictor {
- public:
-  explicit Predictor(std::span<const uint64_t> morton) {
-    if (!morton.empty()) {
-      neighbours_.emplace(morton);
-      cells_.emplace(morton);
-      misses_.resize(morton.size());
-    }
-  }
-  Prediction operator()(std::span<const Rgb8> colors, size_t i) {
-    Gather& gather = gather_;  // a member: its array is not cleared per voxel
-    gather.Clear();
-    near_ = wide_ = Prediction{};
-    if (neighbours_) {
-      cells_->Enter(i);
-      const auto add = [&gather](size_t j, int d2) { gather.Add(j, d2); };
-      neighbours_->ForEach(i, 0, kRadius, add);
-      const bool few = gather.size() < kFewNeighbours;
-      if (few) neighbours_->ForEach(i, kRadius, kFarRadius, add);
-      near_ = gather.Predict(colors, kNear);
-      wide_ = gather.Predict(colors, few ? kWideFar : kWide);
-      int near_miss = 0, wide_miss = 0;
-      for (size_t k = 0; k < gather.size(); ++k) {
-        if (gather[k].second > 3) continue;
-        near_miss += misses_[gather[k].first][0];
-        wide_miss += misses_[gather[k].first][1];
-      }
-      const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
-      if (!best.none) return best;
-      return cells_->Before(i);
-    }
-    Prediction p;
-    if (i > 0) {
-      const Rgb8 c = colors[i - 1];
-      p = {c.g, c.r - c.g, c.b - c.g, 0, 0, 0, true};
-    }
-    return p;
-  }
-  // After color i is known: how far each weighting was from it.
-  void Record(size_t i, const Rgb8& c) {
-    if (misses_.empty()) return;
-    cells_->Add(c);
-    misses_[i] = {static_cast<uint16_t>(near_.none ? 0 : Miss(near_, c)), static_cast<uint16_t>(wide_.none ? 0 : Miss(wide_, c))};
-  }
-
- private:
-  std::optional<CausalNeighbours> neighbours_;
-  std::optional<CellMeans> cells_;
-  std::vector<std::array<uint16_t, 2>> misses_;
-  Prediction near_, wide_;
-  Gather gather_;
-};
 
 // A residual e (-128..127; a decoder may read -255..255, wrapped alike) as binary decisions: e = 0?,
 // e < 0?, then the bit length L of |e| in unary ("L > l?" for l = 1..7, none after 8), the mixed
@@ -194,7 +88,7 @@ void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton
   auto g = std::make_unique<ChannelCoder>(std::array<int, kModels>{s, s * 8, 1, 64});
   auto red = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 1, 8 * r});
   auto blue = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 32, 8 * r});
-  Predictor predict(morton);
+  Predictor predict(morton, 3);
   Share share_r, share_b;
   int last_eg = 0;
   for (size_t i = 0; i < colors.size(); ++i) {
