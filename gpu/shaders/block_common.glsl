@@ -59,7 +59,7 @@ uint64_t MaxSse(uint length) {
   return uint64_t(length) * scaled;
 }
 
-uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 4u; }
+uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 2u; }
 
 void Shrink(inout i64vec3 v) {
   const int64_t largest = max(max(Abs64(v.x), Abs64(v.y)), Abs64(v.z));

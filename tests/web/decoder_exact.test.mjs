@@ -107,7 +107,7 @@ describe('tiles decoded in JavaScript and WebAssembly equal pointdag decode', ()
 });
 
 // A whole-scan file in leaf mode (`pointdag encode --quality`): its VBR colors are block stream
-// version 3, whose weights' contexts come from the voxels' decoded neighbours.
+// version 4, whose weights' contexts and endpoint predictions come from the voxels' decoded neighbours.
 describe('leaf-mode files decoded in JavaScript and WebAssembly equal pointdag decode', () => {
   let wasm, scratch;
   before(async () => {

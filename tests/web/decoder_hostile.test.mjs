@@ -228,20 +228,22 @@ describe('geometry stream versions', () => {
 });
 
 // Block color stream versions 1 (channel differences) and 2 still decode: the version 2 seeds hold
-// the version 1 seeds' decoded colors, re-encoded exactly, the version 3 seeds those of version 2
-// for the voxels 0..count-1 in Morton order (tests/codec/color_test.cc and block_stream_v3_test.cc
-// check C++ alike); version 3 needs the voxels.
+// the version 1 seeds' decoded colors, re-encoded exactly, the version 3 and 4 seeds those of
+// version 2 for the voxels 0..count-1 in Morton order (tests/codec/color_test.cc and
+// block_stream_spatial_test.cc check C++ alike); versions 3 and 4 need the voxels.
 describe('color stream versions', () => {
-  test('vbr and fixed3 versions 1, 2 and 3 decode to the same colors', () => {
+  test('vbr and fixed3 versions 1 to 4 decode to the same colors', () => {
     const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/${name}`, import.meta.url)));
     for (const name of ['color_vbr/vbrquality34coderzstd', 'color_fixed3/fixed3quality34']) {
       const v1 = seed(`${name}.bin`);
       const v2 = seed(`${name}_v2.bin`);
       const v3 = seed(`${name}_v3.bin`);
+      const v4 = seed(`${name}_v4.bin`);
       const count = v1[0] | (v1[1] << 8) | (v1[2] << 16);
       assert.equal(v1[3], 1);
       assert.equal(v2[3], 2);
       assert.equal(v3[3], 3);
+      assert.equal(v4[3], 4);
       const colors = decodeBlockColors(v1.subarray(3), count);
       assert.deepEqual(decodeBlockColors(v2.subarray(3), count), colors);
       const coords = new Uint16Array(3 * count);  // cell of Morton code i: x, y, z from bits 3k+2, 3k+1, 3k
@@ -252,8 +254,10 @@ describe('color stream versions', () => {
           coords[3 * i + 2] |= ((i >> (3 * bit)) & 1) << bit;
         }
       }
-      assert.deepEqual(decodeBlockColors(v3.subarray(3), count, coords), colors);
-      assert.throws(() => decodeBlockColors(v3.subarray(3), count), PdagError);
+      for (const spatial of [v3, v4]) {
+        assert.deepEqual(decodeBlockColors(spatial.subarray(3), count, coords), colors);
+        assert.throws(() => decodeBlockColors(spatial.subarray(3), count), PdagError);
+      }
     }
   });
 });

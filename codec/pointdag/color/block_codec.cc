@@ -14,6 +14,7 @@
 
 #include "pointdag/color/block_stream.h"
 #include "pointdag/color/weight_choice.h"
+#include "pointdag/color/weight_mixer.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/gpu/color_blocks.h"
 #include "pointdag/gpu/stage_device.h"
@@ -80,11 +81,14 @@ std::vector<Candidate> Singletons(uint32_t count) {
   return blocks;
 }
 
-// Bits a block costs in the range-coded stream, roughly: header, second endpoint, weights (which the
-// context model codes at ~0.8 of their width). Calibrated on lion at 1 cm; the cut is not sensitive
-// to it (within 2% of file size across the variants tried).
-// In fifths of a bit, so that the cut is integer arithmetic (the Vulkan port cuts alike).
-uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 4; }
+// What the cut weighs a block by: header 30 bits, second endpoint 30, each weight bit 0.4. Not the
+// stream's cost (block stream version 4 spends ~23, ~20 and 0.45-0.7 bits): the threshold search
+// undoes what the cut does, and keeping longer blocks with more weight bits measured smaller at
+// equal PSNR-Y. Weight bit 0.8 (before stream version 4): VBR at 34/38/42 dB 3-12 % larger on lion,
+// guanyin, autzen, milk and IGN at 25 cm; 0.6: 1-5 % larger; 0.2 (with a 60-bit header): smaller
+// still but chroma 1-5 dB lower (docs/benchmarks.md). In fifths of a bit, so that the cut is integer
+// arithmetic (the Vulkan port cuts alike: gpu/shaders/block_common.glsl).
+uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 2; }
 
 // The first level of the tree above the leaves that merges blocks; the levels below it keep the
 // leaves (refitted, never kept by the cut: more bits for the same length cost more). The cut kept
@@ -223,20 +227,27 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
                                                         BlockLayout layout, uint8_t version, std::span<const uint64_t> morton) {
   if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
   if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
-    return InvalidArgument("color stream version 3 needs one Morton code per color");
+    return InvalidArgument("color stream version " + std::to_string(version) + " needs one Morton code per color");
   }
   const DifferenceCode code{version >= 2};
+  const bool mixed = version >= kFirstMixedVersion;
   std::optional<WeightContexts> spatial;
   if (version >= kFirstSpatialVersion) spatial.emplace(morton);
   std::vector<uint8_t> out = {version, static_cast<uint8_t>(layout), 0, 0};
   PutVarint(out, colors.size());
   PutVarint(out, blocks.size());
   auto models = std::make_unique<BlockModels>();
+  std::optional<WeightMixer> mixer;
+  if (mixed) mixer.emplace();
   BinaryRangeEncoder rc;
   uint64_t next = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
   std::vector<uint8_t> weights(kMacroBlockColors);
+  const auto encode_difference = [&](std::array<GammaModel, 3>& m, int dr, int dg, int db) {
+    const auto d = code.Components(dr, dg, db);
+    for (int c = 0; c < 3; ++c) EncodeGamma(rc, m[c], ZigZag(d[c]), code.MaxBits());
+  };
   for (const ColorBlock& b : blocks) {
     if (b.start != next || b.length == 0 || b.length > kMacroBlockColors || b.bits > kMaxWeightBits ||
         b.start + b.length > colors.size()) {
@@ -246,17 +257,32 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
     EncodeGamma(rc, models->length[prev_bits], b.length, kLengthBits);
     if (layout == BlockLayout::kVariableRate) EncodeBitTree<3>(rc, models->width[prev_bits], b.bits);
     const Endpoints& e = b.ends;
-    const auto a = code.Components(e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
-    for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->a[c], ZigZag(a[c]), code.MaxBits());
+    const std::array<int, 3> span = {e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b};
+    if (mixed) {
+      // B - A first: the prediction of A aims the segment's middle at the neighbours' mean.
+      if (b.bits) encode_difference(models->b[b.bits], span[0], span[1], span[2]);
+      const BlockSurroundings near = spatial->Surroundings(b.start, b.length);
+      if (near.weight > 0) {
+        const auto p = PredictA(near, b.bits ? span : std::array<int, 3>{});
+        encode_difference(models->a_near, e.a.r - p[0], e.a.g - p[1], e.a.b - p[2]);
+      } else {
+        encode_difference(models->a, e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
+      }
+    } else {
+      encode_difference(models->a, e.a.r - prev_a.r, e.a.g - prev_a.g, e.a.b - prev_a.b);
+      if (b.bits) encode_difference(models->b[b.bits], span[0], span[1], span[2]);
+    }
     if (b.bits) {
-      const auto ba = code.Components(e.b.r - e.a.r, e.b.g - e.a.g, e.b.b - e.a.b);
-      for (int c = 0; c < 3; ++c) EncodeGamma(rc, models->b[b.bits][c], ZigZag(ba[c]), code.MaxBits());
       ChooseBlockWeights(colors, b, weights);
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = weights[i - b.start];
-        const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
-        EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
+        if (mixed) {
+          mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits, true), prev_w}, w);
+        } else {
+          const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
+          EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
+        }
         if (spatial) spatial->Record(i, Interpolate(b.ends, w, b.bits));
         prev_w = w;
       }

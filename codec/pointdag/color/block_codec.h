@@ -60,8 +60,8 @@ StatusOr<gpu::VulkanContext*> ColorBlocksDevice();
 
 // The stored form: block table and weights, range-coded with adaptive models
 // (layout: proto/PDAG_FORMAT.md §3). `morton`: the voxels' Morton codes when `colors` are one per
-// voxel in Morton order (leaf mode; sorted, unique), which give the weights spatial contexts
-// (stream version 3), else empty (version 2).
+// voxel in Morton order (leaf mode; sorted, unique), which give the weights spatial contexts and
+// endpoint A a prediction from the decoded neighbours (stream version 4), else empty (version 2).
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout, std::span<const uint64_t> morton = {});
 
@@ -69,7 +69,7 @@ StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std
 class BlockColorDecoder {
  public:
   // `expected_count`: how many colors the caller knows there are (bounds every allocation).
-  // `morton`: as for SerializeBlocks; a version 3 stream is kCorrupt without them (count of them).
+  // `morton`: as for SerializeBlocks; a version 3 or 4 stream is kCorrupt without them (count of them).
   // They only steer the entropy decode here: once open, a color decodes without its neighbours.
   static StatusOr<BlockColorDecoder> Open(std::span<const uint8_t> stored, uint64_t expected_count,
                                           std::span<const uint64_t> morton = {});

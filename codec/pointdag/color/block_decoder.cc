@@ -7,6 +7,7 @@
 #include <string>
 
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/weight_mixer.h"
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
@@ -34,6 +35,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   if (stored.size() < 4) return Truncated("color stream is shorter than its header");
   if (stored[0] < 1 || stored[0] > kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
   const DifferenceCode code{stored[0] >= 2};
+  const bool mixed = stored[0] >= kFirstMixedVersion;
   const auto layout = static_cast<BlockLayout>(stored[1]);
   if (layout != BlockLayout::kFixedRate && layout != BlockLayout::kVariableRate) return Corrupt("color stream layout is unknown");
   size_t pos = 4;
@@ -62,7 +64,15 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   std::optional<WeightContexts> spatial;
   if (spatial_contexts) spatial.emplace(morton);
   auto models = std::make_unique<BlockModels>();
+  std::optional<WeightMixer> mixer;
+  if (mixed) mixer.emplace();
   BinaryRangeDecoder rc(stored.subspan(pos));
+  // An endpoint difference (dR, dG, dB) from its three coded components.
+  const auto decode_difference = [&](std::array<GammaModel, 3>& m) {
+    std::array<int, 3> components{};
+    for (int c = 0; c < 3; ++c) components[c] = UnZigZag(DecodeGamma(rc, m[c], code.MaxBits()));
+    return code.Channels(components);
+  };
   uint64_t next = 0, weight_bits = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
@@ -79,12 +89,17 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     if (bits > kMaxWeightBits) return Corrupt("color block has more than 4 bits per weight");
     if (length == 0 || length > count - next) return Corrupt("color block length is impossible");
     if (next / kMacroBlockColors != (next + length - 1) / kMacroBlockColors) return Corrupt("color block crosses a macro block");
-    std::array<int, 3> da{}, de{};  // A - previous A, B - A
-    for (int c = 0; c < 3; ++c) da[c] = UnZigZag(DecodeGamma(rc, models->a[c], code.MaxBits()));
-    for (int c = 0; bits && c < 3; ++c) de[c] = UnZigZag(DecodeGamma(rc, models->b[bits][c], code.MaxBits()));
-    da = code.Channels(da);
-    de = code.Channels(de);
-    const int a[3] = {prev_a.r + da[0], prev_a.g + da[1], prev_a.b + da[2]};
+    std::array<int, 3> base = {prev_a.r, prev_a.g, prev_a.b}, da{}, de{};  // A - base, B - A
+    if (mixed) {
+      if (bits) de = decode_difference(models->b[bits]);
+      const BlockSurroundings near = spatial->Surroundings(next, length);
+      if (near.weight > 0) base = PredictA(near, de);
+      da = decode_difference(near.weight > 0 ? models->a_near : models->a);
+    } else {
+      da = decode_difference(models->a);
+      if (bits) de = decode_difference(models->b[bits]);
+    }
+    const int a[3] = {base[0] + da[0], base[1] + da[1], base[2] + da[2]};
     const int e[3] = {a[0] + de[0], a[1] + de[1], a[2] + de[2]};
     for (int ch = 0; ch < 3; ++ch) {
       if (a[ch] < 0 || a[ch] > 255 || e[ch] < 0 || e[ch] > 255) return Corrupt("color block endpoint outside 0..255");
@@ -97,8 +112,13 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     uint32_t prev_w = 16;
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     for (uint32_t i = 0; bits && i < length; ++i) {
-      const uint32_t context = spatial ? spatial->Of(next + i, ends, bits, prev_w) : prev_w;
-      const uint32_t w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][context], bits);
+      uint32_t w;
+      if (mixed) {
+        w = mixer->Decode(rc, bits, {spatial->Position(next + i, ends, bits, true), prev_w});
+      } else {
+        const uint32_t context = spatial ? spatial->Of(next + i, ends, bits, prev_w) : prev_w;
+        w = DecodeBitTree<kMaxWeightBits>(rc, models->weight[bits][context], bits);
+      }
       d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);
       if ((weight_bits & 63) + static_cast<uint64_t>(bits) > 64) d.weights_[(weight_bits >> 6) + 1] |= uint64_t{w} >> (64 - (weight_bits & 63));
       weight_bits += static_cast<uint64_t>(bits);

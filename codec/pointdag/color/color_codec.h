@@ -51,7 +51,7 @@ struct EncodedColors {
 
 // `morton`: the voxels' Morton codes when `colors` are one per voxel in Morton order (leaf mode),
 // else empty; the lossless codec predicts from neighbours found by them, and the block codecs take
-// their weights' contexts from them (block stream version 3). `judged`: the indices of
+// their weights' contexts and endpoint predictions from them (block stream version 4). `judged`: the indices of
 // the colors that the target and the reported PSNR are measured on (mipmap mode: the voxels, not
 // the internal nodes' colors), each below colors.size(); empty: all of them.
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,

@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cstddef>
+#include <cstdint>
 
 namespace pointdag {
 namespace {
@@ -28,36 +29,44 @@ constexpr int BrickBit(int x, int y, int z) {
 }
 
 // A neighbour that may precede a voxel, seen from the voxel's cell in its brick: the brick it lies
-// in (slot of WeightContexts::near_), its bit there, and its weight (faces 4, edges 2, corners 1).
+// in (slot of a cursor's near bricks), its bit there, and its weight.
 struct Neighbour {
   uint8_t slot, bit, weight;
 };
-constexpr int kMayPrecede = 19;  // of the 26 offsets, those with a negative component (the code grows with each coordinate)
 
-// Per cell of a brick (its bit), its neighbours that may precede it; those later in its own brick
-// are left out (weight 0).
-constexpr auto MakeNeighbourTable() {
-  std::array<std::array<Neighbour, kMayPrecede>, 64> table{};
+// Per cell of a brick (its bit), the cells at the offsets up to `reach` on each axis (and beyond
+// `inside` on one) that may precede it: those with a negative component, as the code grows with
+// each coordinate; those later in its own brick are left out (weight 0). Offsets of -2..2 stay
+// within the bricks around the cell's own.
+template <int kCount, typename Weight>
+constexpr auto MakeNeighbourTable(int inside, int reach, Weight weight) {
+  std::array<std::array<Neighbour, kCount>, 64> table{};
   for (int own = 0; own < 64; ++own) {
     const int lx = (own >> 2 & 1) | (own >> 4 & 2), ly = (own >> 1 & 1) | (own >> 3 & 2), lz = (own & 1) | (own >> 2 & 2);
     int n = 0;
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          if (dx >= 0 && dy >= 0 && dz >= 0) continue;
+    for (int dx = -reach; dx <= reach; ++dx) {
+      for (int dy = -reach; dy <= reach; ++dy) {
+        for (int dz = -reach; dz <= reach; ++dz) {
+          if ((dx >= 0 && dy >= 0 && dz >= 0) || std::max({dx, -dx, dy, -dy, dz, -dz}) <= inside) continue;
           const int nx = lx + dx, ny = ly + dy, nz = lz + dz;
           const int slot = ((nx >> 2) + 1) * 9 + ((ny >> 2) + 1) * 3 + ((nz >> 2) + 1);  // >> 2: -1, 0 or 1
           const int bit = BrickBit(nx & 3, ny & 3, nz & 3);
           const bool later = slot == 13 && bit > own;
-          table[own][n++] = {static_cast<uint8_t>(slot), static_cast<uint8_t>(bit),
-                             static_cast<uint8_t>(later ? 0 : 8 >> ((dx != 0) + (dy != 0) + (dz != 0)))};
+          table[own][n++] = {static_cast<uint8_t>(slot), static_cast<uint8_t>(bit), static_cast<uint8_t>(later ? 0 : weight(dx, dy, dz))};
         }
       }
     }
   }
   return table;
 }
-constexpr auto kNeighbours = MakeNeighbourTable();
+// The 19 of the 26 face, edge and corner neighbours that may precede: faces weigh 4, edges 2, corners 1.
+constexpr auto kNeighbours = MakeNeighbourTable<19>(0, 1, [](int dx, int dy, int dz) { return 8 >> ((dx != 0) + (dy != 0) + (dz != 0)); });
+// The 79 of the 98 cells two away (the 5x5x5 shell) that may precede, weighted by squared distance
+// d² 4 -> 3, 5 or 6 -> 2, 8, 9 or 12 -> 1 (the lossless coder's wide weights there).
+constexpr auto kFarNeighbours = MakeNeighbourTable<79>(1, 2, [](int dx, int dy, int dz) {
+  const int d2 = dx * dx + dy * dy + dz * dz;
+  return d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
+});
 
 }  // namespace
 
@@ -67,11 +76,27 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
     if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
     bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
   }
-  if (!bricks_.empty()) EnterBrick(0);
+  for (Cursor& c : recent_) c.current = SIZE_MAX;
+  if (!bricks_.empty()) {
+    EnterBrick(weights_, 0);
+    ends_ = weights_;
+  }
 }
 
-void WeightContexts::EnterBrick(size_t k) {
-  current_ = k;
+void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
+  size_t k = cursor.current;
+  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
+  if (k != cursor.current) EnterBrick(cursor, k);
+}
+
+void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
+  for (const Cursor& c : recent_) {
+    if (c.current == k) {
+      cursor = c;
+      return;
+    }
+  }
+  cursor.current = k;
   const uint64_t code = bricks_[k].code;
   for (int dx = -1; dx <= 1; ++dx) {
     uint64_t cx = code;
@@ -80,7 +105,7 @@ void WeightContexts::EnterBrick(size_t k) {
       uint64_t cy = cx;
       const bool y_ok = x_ok && Moved(cx, 1, dy, cy);
       for (int dz = -1; dz <= 1; ++dz) {
-        Brick& near = near_[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+        Brick& near = cursor.near[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
         near = {0, 0, 0};
         uint64_t c = cy;
         if (!y_ok || !Moved(cy, 2, dz, c) || c > code) continue;  // outside, or after this brick
@@ -94,32 +119,60 @@ void WeightContexts::EnterBrick(size_t k) {
       }
     }
   }
+  recent_[next_recent_] = cursor;
+  next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
-uint32_t WeightContexts::Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev) {
-  size_t k = current_;
-  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
-  if (k != current_) EnterBrick(k);
-
-  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
-  for (const Neighbour& n : kNeighbours[morton_[i] & 63]) {
-    const Brick& near = near_[n.slot];
+template <typename Table, typename F>
+void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
+  for (const Neighbour& n : table[morton_[i] & 63]) {
+    const Brick& near = cursor.near[n.slot];
     if (n.weight == 0 || !(near.mask >> n.bit & 1)) continue;
-    const Rgb8 c = decoded_[near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1)))];
-    r += n.weight * c.r;
-    g += n.weight * c.g;
-    b += n.weight * c.b;
-    total += n.weight;
+    f(near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1))), n.weight);
   }
-  if (total == 0) return 16 + prev;
-  // Their mean's position on the segment A -> B in weight steps, rounded, clamped to 0..m (0 where
-  // A = B): one division per weight, not one per neighbour.
+}
+
+NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, int bits, bool far) {
+  Seek(weights_, i);
+  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
+  const auto add = [&](size_t j, int64_t weight) {
+    const Rgb8 c = decoded_[j];
+    r += weight * c.r;
+    g += weight * c.g;
+    b += weight * c.b;
+    total += weight;
+  };
+  ForEachPreceding(kNeighbours, weights_, i, add);
+  const bool beyond = total == 0 && far;
+  if (beyond) ForEachPreceding(kFarNeighbours, weights_, i, add);
+  if (total == 0) return {};
+  // Their mean's position on the segment A -> B in weight (half) steps, rounded, clamped to 0..m
+  // (0..2m; 0 where A = B): one division per weight, not one per neighbour.
   const int64_t m = (1 << bits) - 1;
   const int64_t sr = ends.b.r - ends.a.r, sg = ends.b.g - ends.a.g, sb = ends.b.b - ends.a.b;
   const int64_t len2 = sr * sr + sg * sg + sb * sb;
   const int64_t dot = (r - total * ends.a.r) * sr + (g - total * ends.a.g) * sg + (b - total * ends.a.b) * sb;
-  if (dot <= 0 || len2 == 0) return 0;
-  return static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / (2 * total * len2)));
+  if (dot <= 0 || len2 == 0) return {true, beyond, 0, 0};
+  const int64_t unit = 2 * total * len2;
+  return {true, beyond, static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / unit)),
+          static_cast<uint32_t>(std::min(2 * m, (4 * dot * m + total * len2) / unit))};
+}
+
+BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) {
+  BlockSurroundings s;
+  const uint64_t stop = start + std::min(length, kPredictingVoxels);
+  for (uint64_t i = start; i < stop; ++i) {
+    Seek(ends_, i);
+    ForEachPreceding(kNeighbours, ends_, i, [&](size_t j, int64_t weight) {
+      if (j >= start) return;  // inside the block: not decoded yet
+      const Rgb8 c = decoded_[j];
+      s.r += weight * c.r;
+      s.g += weight * c.g;
+      s.b += weight * c.b;
+      s.weight += weight;
+    });
+  }
+  return s;
 }
 
 }  // namespace pointdag

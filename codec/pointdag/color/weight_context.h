@@ -1,5 +1,7 @@
-// Spatial contexts for the block color stream's weights (stream version 3, leaf mode;
+// Spatial contexts for the block color stream's weights (stream versions 3 and 4, leaf mode;
 // proto/PDAG_FORMAT.md §3), shared by its writer (SerializeBlocks) and reader (BlockColorDecoder::Open).
+// Version 4 also takes the position in half steps (weight_mixer.h) and predicts a block's endpoint A
+// from the decoded neighbours around its first voxels (Surroundings; PredictA in block_stream.h).
 //
 // Colors are one per voxel in Morton order, so of a voxel's 26 face, edge and corner neighbours
 // those with a lower Morton code are decoded before it. The mean of their decoded colors (faces
@@ -18,7 +20,8 @@
 // brick, and which cells a voxel's preceding neighbours are comes from a table per cell. Whole-file
 // decode of lion 1 cm at 38 dB (DecodePdag, one core): version 2 52 ms; version 3 with a hash table
 // of the codes (as the lossless colors use) 114 ms, with bricks 106, with the table and one
-// projection per weight (not per neighbour) 88.
+// projection per weight (not per neighbour) 88. Version 4 walks the bricks twice (the endpoints' walk
+// runs ahead of the weights'), sharing the bricks last entered.
 #pragma once
 
 #include <array>
@@ -34,16 +37,42 @@ namespace pointdag {
 // 16 = the first of a block) without neighbours.
 constexpr int kSpatialWeightContexts = 33;
 
+// Where the decoded neighbours' mean color lies on a block's segment A -> B, rounded to its weight
+// steps (0..m, m = 2^bits - 1) and to half steps (0..2m); `found` false without such neighbours,
+// `far` where they are the cells two away (none of the 26 around precedes).
+struct NeighbourPosition {
+  bool found = false, far = false;
+  uint32_t step = 0, half_step = 0;
+};
+
+// The neighbours that precede a block (stream version 4's endpoint prediction): the weighted sum
+// of their decoded colors and of their weights, each neighbour counted once per voxel of the block
+// it touches (the block's first kPredictingVoxels voxels).
+struct BlockSurroundings {
+  int64_t r = 0, g = 0, b = 0, weight = 0;
+};
+constexpr uint32_t kPredictingVoxels = 64;
+
 class WeightContexts {
  public:
   // `morton`: one code per color, sorted and unique (as decoded geometry enumerates the voxels);
   // must outlive this object.
   explicit WeightContexts(std::span<const uint64_t> morton);
 
-  // The context of color i's weight in a block of `ends` and `bits` (1..4) per weight, `prev` the
-  // previous weight of the same block (16 at its first). Colors before i must be recorded; i
-  // never decreases from one call to the next.
-  uint32_t Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev);
+  // Where color i's preceding neighbours lie on the segment of a block of `ends` and `bits` (1..4)
+  // per weight; with `far`, where none of the 26 around it precedes it, the preceding cells two
+  // away (version 4). Colors before i must be recorded; i never decreases from one call to the next.
+  NeighbourPosition Position(uint64_t i, const Endpoints& ends, int bits, bool far);
+  // Version 3's context of color i's weight: Position's step, else 16 + `prev`, the previous weight
+  // of the same block (16 at its first).
+  uint32_t Of(uint64_t i, const Endpoints& ends, int bits, uint32_t prev) {
+    const NeighbourPosition p = Position(i, ends, bits, false);
+    return p.found ? p.step : 16 + prev;
+  }
+  // The decoded neighbours of the block of colors [start, start + length) that precede it. Colors
+  // before `start` must be recorded; `start` never decreases from one call to the next, and is at
+  // least the last Position's i.
+  BlockSurroundings Surroundings(uint64_t start, uint32_t length);
   // Color i as decoded.
   void Record(uint64_t i, const Rgb8& c) { decoded_[i] = c; }
 
@@ -53,15 +82,27 @@ class WeightContexts {
     uint32_t start;  // index of its first voxel
     uint64_t mask;   // bit (Morton code & 63) per voxel
   };
-  // Brick k becomes the current one: near_ gets its neighbour bricks that precede it (and itself),
-  // by offset (dx + 1) * 9 + (dy + 1) * 3 + dz + 1 (its slot), with an empty mask elsewhere.
-  void EnterBrick(size_t k);
+  // A walk forward through the bricks: `near` holds brick `current`'s neighbour bricks that precede
+  // it (and itself), by offset (dx + 1) * 9 + (dy + 1) * 3 + dz + 1 (its slot), with an empty mask
+  // elsewhere. Weights and endpoints each walk with their own.
+  struct Cursor {
+    size_t current = 0;
+    std::array<Brick, 27> near{};
+  };
+  void Seek(Cursor& cursor, uint64_t i);
+  void EnterBrick(Cursor& cursor, size_t k);
+  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbours
+  // by its bit in the brick) that precedes it.
+  template <typename Table, typename F>
+  void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
 
   std::span<const uint64_t> morton_;
   std::vector<Rgb8> decoded_;
   std::vector<Brick> bricks_;
-  size_t current_ = 0;
-  std::array<Brick, 27> near_{};
+  Cursor weights_, ends_;
+  // The bricks most recently entered by either cursor: the other enters the same ones soon after.
+  std::array<Cursor, 8> recent_{};
+  size_t next_recent_ = 0;
 };
 
 }  // namespace pointdag

@@ -1,6 +1,7 @@
-// Logistic mixing's arithmetic, in integers so that every decoder (the JavaScript one included)
-// computes the same bits: probabilities in 1/4096, their logits ("stretch") in 1/256 nats. Used by
-// the geometry's mask mixer (dag/mask_mixer.h) and the lossless colors (color/lossless_mixing.cc).
+// Logistic mixing's arithmetic, in integers so that every decoder (the JavaScript one included,
+// web/src/decoder/logistic.js) computes the same bits: probabilities in 1/4096, their logits
+// ("stretch") in 1/256 nats. Used by the geometry's mask mixer (dag/mask_mixer.h), the lossless
+// colors (color/lossless_mixing.cc) and the block colors' weight mixer (color/weight_mixer.h).
 #pragma once
 
 #include <algorithm>

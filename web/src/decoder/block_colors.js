@@ -6,9 +6,11 @@ import { corrupt } from './pdag_error.js';
 import { GAMMA_MODELS, RangeDecoder, bitTreeModels, newModels, unZigZag } from './range_coder.js';
 import { readVarint } from './varint.js';
 import { WeightContexts, SPATIAL_WEIGHT_CONTEXTS } from './weight_contexts.js';
+import { WeightMixer } from './weight_mixer.js';
 
-const STREAM_VERSION = 3;  // 1 and 2 still read
+const STREAM_VERSION = 4;  // 1 to 3 still read
 const FIRST_SPATIAL_VERSION = 3;
+const FIRST_MIXED_VERSION = 4;
 const LAYOUT_FIXED = 1;
 const LAYOUT_VARIABLE = 2;
 const FIXED_BITS = 3;
@@ -21,16 +23,19 @@ const WIDTHS = MAX_WEIGHT_BITS + 1;
 const LENGTH_BASE = 0;
 const WIDTH_BASE = LENGTH_BASE + WIDTHS * GAMMA_MODELS;
 const A_BASE = WIDTH_BASE + WIDTHS * bitTreeModels(3);
-const B_BASE = A_BASE + 3 * GAMMA_MODELS;
+const A_NEAR_BASE = A_BASE + 3 * GAMMA_MODELS;  // version 4: A predicted from the block's neighbours
+const B_BASE = A_NEAR_BASE + 3 * GAMMA_MODELS;
 const WEIGHT_BASE = B_BASE + WIDTHS * 3 * GAMMA_MODELS;
 const WEIGHT_TREE = bitTreeModels(MAX_WEIGHT_BITS);
 // Per width: 17 previous weights (16 = first of a block) in versions 1 and 2, 33 spatial contexts in 3.
 const WEIGHT_CONTEXTS = SPATIAL_WEIGHT_CONTEXTS;
 const MODEL_COUNT = WEIGHT_BASE + WIDTHS * WEIGHT_CONTEXTS * WEIGHT_TREE;
 
+const clampByte = (v) => (v < 0 ? 0 : v > 255 ? 255 : v);
+
 // `stored`: the stream after the section's codec byte; `expectedCount` from decoded geometry;
 // `coords`: the voxels' cells (x, y, z per voxel in Morton order) where the colors are one per voxel
-// (leaf mode), else null; version 3 streams need them. -> Uint8Array(3 * expectedCount), RGB per color.
+// (leaf mode), else null; version 3 and 4 streams need them. -> Uint8Array(3 * expectedCount), RGB per color.
 export function decodeBlockColors(stored, expectedCount, coords = null) {
   if (stored.length < 4) throw corrupt('color stream is shorter than its header');
   if (stored[0] < 1 || stored[0] > STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
@@ -56,7 +61,10 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
     throw corrupt(`color stream declares ${count} colors, more than its ${payloadSize} bytes can hold`);
   }
 
+  const mixed = stored[0] >= FIRST_MIXED_VERSION;
   const spatial = spatialContexts ? new WeightContexts(coords) : null;
+  const mixer = mixed ? new WeightMixer() : null;
+  const near = new Int32Array(4);  // the block's surroundings: weighted R, G, B sums and weight
   const p = newModels(MODEL_COUNT);
   const rc = new RangeDecoder(stored, cursor.pos);
   let out = new Uint8Array(3 * Math.min(count, 4 * MACRO_BLOCK));
@@ -70,22 +78,39 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
     if (bits > MAX_WEIGHT_BITS) throw corrupt('color block has more than 4 bits per weight');
     if (length === 0 || length > count - next) throw corrupt('color block length is impossible');
     if (Math.floor(next / MACRO_BLOCK) !== Math.floor((next + length - 1) / MACRO_BLOCK)) throw corrupt('color block crosses a macro block');
-    let d0 = unZigZag(rc.gamma(p, A_BASE, differenceBits));
-    let d1 = unZigZag(rc.gamma(p, A_BASE + GAMMA_MODELS, differenceBits));
-    let d2 = unZigZag(rc.gamma(p, A_BASE + 2 * GAMMA_MODELS, differenceBits));
-    const ar = pr + (decorrelated ? d1 + d0 : d0);
-    const ag = pg + (decorrelated ? d0 : d1);
-    const ab = pb + (decorrelated ? d2 + d0 : d2);
-    let br = ar, bg = ag, bb = ab;
-    if (bits) {
+    // Endpoint differences: A from a base (the previous block's A, or in version 4 the prediction
+    // from the block's neighbours), B from A, as (dG, dR - dG, dB - dG) from version 2 on.
+    let ar = pr, ag = pg, ab = pb, sr = 0, sg = 0, sb = 0;  // A's base, then A; B - A
+    const readSpan = () => {
       const base = B_BASE + bits * 3 * GAMMA_MODELS;
-      d0 = unZigZag(rc.gamma(p, base, differenceBits));
-      d1 = unZigZag(rc.gamma(p, base + GAMMA_MODELS, differenceBits));
-      d2 = unZigZag(rc.gamma(p, base + 2 * GAMMA_MODELS, differenceBits));
-      br = ar + (decorrelated ? d1 + d0 : d0);
-      bg = ag + (decorrelated ? d0 : d1);
-      bb = ab + (decorrelated ? d2 + d0 : d2);
+      const d0 = unZigZag(rc.gamma(p, base, differenceBits));
+      const d1 = unZigZag(rc.gamma(p, base + GAMMA_MODELS, differenceBits));
+      const d2 = unZigZag(rc.gamma(p, base + 2 * GAMMA_MODELS, differenceBits));
+      sr = decorrelated ? d1 + d0 : d0;
+      sg = decorrelated ? d0 : d1;
+      sb = decorrelated ? d2 + d0 : d2;
+    };
+    let aBase = A_BASE;
+    if (mixed) {
+      if (bits) readSpan();
+      spatial.surroundings(next, length, out, near);
+      if (near[3] > 0) {
+        // PredictA in block_stream.h: the neighbours' mean less half of B - A (toward zero), clamped.
+        const half = near[3] >> 1;
+        ar = clampByte(Math.floor((near[0] + half) / near[3]) - Math.trunc(sr / 2));
+        ag = clampByte(Math.floor((near[1] + half) / near[3]) - Math.trunc(sg / 2));
+        ab = clampByte(Math.floor((near[2] + half) / near[3]) - Math.trunc(sb / 2));
+        aBase = A_NEAR_BASE;
+      }
     }
+    const d0 = unZigZag(rc.gamma(p, aBase, differenceBits));
+    const d1 = unZigZag(rc.gamma(p, aBase + GAMMA_MODELS, differenceBits));
+    const d2 = unZigZag(rc.gamma(p, aBase + 2 * GAMMA_MODELS, differenceBits));
+    ar += decorrelated ? d1 + d0 : d0;
+    ag += decorrelated ? d0 : d1;
+    ab += decorrelated ? d2 + d0 : d2;
+    if (bits && !mixed) readSpan();
+    const br = ar + sr, bg = ag + sg, bb = ab + sb;
     if ((ar | ag | ab | br | bg | bb) & ~0xff) throw corrupt('color block endpoint outside 0..255');
     if (3 * (next + length) > out.length) {
       const bigger = new Uint8Array(3 * Math.min(count, Math.max(2 * (out.length / 3), next + length)));
@@ -110,8 +135,13 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
       const wBase = WEIGHT_BASE + bits * WEIGHT_CONTEXTS * WEIGHT_TREE;
       let prevW = 16;
       for (let i = 0; i < length; ++i, o += 3) {
-        const context = spatial ? spatial.of(next + i, out, ar, ag, ab, br, bg, bb, bits, prevW) : prevW;
-        const w = rc.bitTree(p, wBase + context * WEIGHT_TREE, bits);
+        let w;
+        if (mixed) {
+          w = mixer.decode(rc, bits, spatial.position(next + i, out, ar, ag, ab, br, bg, bb, bits, true), prevW);
+        } else {
+          const context = spatial ? spatial.of(next + i, out, ar, ag, ab, br, bg, bb, bits, prevW) : prevW;
+          w = rc.bitTree(p, wBase + context * WEIGHT_TREE, bits);
+        }
         out[o] = palette[3 * w];
         out[o + 1] = palette[3 * w + 1];
         out[o + 2] = palette[3 * w + 2];

@@ -19,7 +19,7 @@ export function unsupportedColorCodec(codec) {
 }
 
 // `count` must come from decoded geometry; `coords`: the voxels' cells in Morton order where the
-// colors are one per voxel (leaf mode), else null (block streams of version 3 need them).
+// colors are one per voxel (leaf mode), else null (block streams of versions 3 and 4 need them).
 // -> Uint8Array(3 * count), RGB per color, owned.
 export function decodeColors(section, count, coords = null) {
   if (section.length === 0) throw corrupt('colors section is empty');

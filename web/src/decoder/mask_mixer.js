@@ -4,28 +4,8 @@
 // learnt per (child, any bit set so far); one set for all classes, fresh per stream. Version 4
 // mixes two more: (mask so far, which of the node's six face neighbours exist) and (mask so far,
 // the child's plane memory state).
+import { STRETCH, squash } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
-
-// P(bit = 1) in 1/4096 at d = −2048, −1920, .., 2048 (1/256 nats).
-const KNOTS = Int32Array.from([1, 2, 4, 6, 10, 17, 27, 45, 74, 120, 194, 311, 488, 747, 1102, 1546, 2048, 2550, 2994,
-  3349, 3608, 3785, 3902, 3976, 4022, 4051, 4069, 4079, 4086, 4090, 4092, 4094, 4095]);
-
-function squash(d) {
-  const x = (d < -2047 ? -2047 : d > 2047 ? 2047 : d) + 2048;
-  const i = x >> 7;
-  const w = x & 127;
-  return (KNOTS[i] * (128 - w) + KNOTS[i + 1] * w + 64) >> 7;
-}
-
-// Its inverse on 0..4095: the least d whose squash reaches p (2047 beyond).
-const STRETCH = new Int16Array(4096);
-{
-  let next = 0;
-  for (let d = -2047; d <= 2047; ++d) {
-    for (const v = squash(d); next <= v && next < 4096; ++next) STRETCH[next] = d;
-  }
-  for (; next < 4096; ++next) STRETCH[next] = 2047;
-}
 
 const BIAS = 256;
 const MAX_WEIGHT = 1 << 22;

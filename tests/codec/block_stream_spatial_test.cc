@@ -1,4 +1,5 @@
-// Block color stream version 3: the weights' spatial contexts (color/weight_context.h).
+// Block color stream versions 3 and 4 (leaf mode): the weights' spatial contexts (color/weight_context.h),
+// version 4's weight mixer (color/weight_mixer.h) and endpoints predicted from the neighbours.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -42,69 +43,81 @@ Surface WavySurface(uint32_t side, uint32_t seed) {
   return s;
 }
 
-TEST(BlockStreamV3, DecodesToTheSameColorsAsVersionTwoInFewerBytes) {
+TEST(BlockStreamSpatial, VersionsTwoToFourDecodeToTheSameColorsEachInFewerBytes) {
   const Surface s = WavySurface(160, 1);  // ~27000 voxels: two macro blocks
   for (BlockLayout layout : {BlockLayout::kVariableRate, BlockLayout::kFixedRate}) {
     const auto blocks = *EncodeBlocks(s.colors, layout, 12.0);
     const auto v2 = *SerializeBlocks(s.colors, blocks, layout);
-    const auto v3 = *SerializeBlocks(s.colors, blocks, layout, s.morton);
+    const auto v3 = *SerializeBlocksAsVersion(s.colors, blocks, layout, 3, s.morton);
+    const auto v4 = *SerializeBlocks(s.colors, blocks, layout, s.morton);
     ASSERT_EQ(v2[0], 2);
     ASSERT_EQ(v3[0], 3);
+    ASSERT_EQ(v4[0], 4);
     EXPECT_LT(v3.size(), v2.size());
+    EXPECT_LT(v4.size(), v3.size());
     auto old = BlockColorDecoder::Open(v2, s.colors.size());
-    auto spatial = BlockColorDecoder::Open(v3, s.colors.size(), s.morton);
-    ASSERT_TRUE(old.ok() && spatial.ok()) << spatial.status().ToString();
-    const std::vector<Rgb8> colors = spatial->DecodeAll();
-    EXPECT_EQ(colors, old->DecodeAll());
-    // Random access after Open: one color at a time, without its neighbours.
-    for (uint64_t i = 0; i < colors.size(); i += 13) ASSERT_EQ(spatial->At(i), colors[i]) << i;
-  }
-}
-
-TEST(BlockStreamV3, IsRefusedWithoutTheVoxelsMortonCodes) {
-  const Surface s = WavySurface(40, 2);
-  const auto v3 = *SerializeBlocks(s.colors, *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 12.0), BlockLayout::kVariableRate, s.morton);
-  const auto missing = BlockColorDecoder::Open(v3, s.colors.size()).status();
-  EXPECT_EQ(missing.code(), StatusCode::kCorrupt) << missing.ToString();
-  const std::span<const uint64_t> fewer(s.morton.data(), s.morton.size() - 1);
-  EXPECT_EQ(BlockColorDecoder::Open(v3, s.colors.size(), fewer).status().code(), StatusCode::kCorrupt);
-  EXPECT_FALSE(SerializeBlocksAsVersion(s.colors, {}, BlockLayout::kVariableRate, 3, fewer).ok());
-}
-
-TEST(BlockStreamV3, CorruptStreamsAreErrorsNotCrashes) {
-  const Surface s = WavySurface(60, 3);
-  const auto stream = *SerializeBlocks(s.colors, *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 10.0), BlockLayout::kVariableRate, s.morton);
-  for (size_t len = 0; len < stream.size(); len += 1 + stream.size() / 200) {
-    EXPECT_FALSE(BlockColorDecoder::Open(std::span(stream).first(len), s.colors.size(), s.morton).ok()) << len;
-  }
-  std::mt19937 rng(4);
-  for (int trial = 0; trial < 300; ++trial) {
-    auto bad = stream;
-    bad[rng() % bad.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
-    auto decoder = BlockColorDecoder::Open(bad, s.colors.size(), s.morton);
-    if (decoder.ok()) {
-      for (uint64_t i = 0; i < decoder->size(); i += 97) (void)decoder->At(i);  // in bounds, whatever it holds
+    ASSERT_TRUE(old.ok()) << old.status().ToString();
+    const std::vector<Rgb8> colors = old->DecodeAll();
+    for (const auto* stream : {&v3, &v4}) {
+      auto spatial = BlockColorDecoder::Open(*stream, s.colors.size(), s.morton);
+      ASSERT_TRUE(spatial.ok()) << spatial.status().ToString();
+      EXPECT_EQ(spatial->DecodeAll(), colors);
+      // Random access after Open: one color at a time, without its neighbours.
+      for (uint64_t i = 0; i < colors.size(); i += 13) ASSERT_EQ(spatial->At(i), colors[i]) << i;
     }
   }
 }
 
-// Leaf-mode sections (Morton codes given) are version 3, mipmap ones (none) version 2; both decode.
-TEST(BlockStreamV3, ColorSectionsPickTheirVersionByTheMortonCodes) {
+TEST(BlockStreamSpatial, IsRefusedWithoutTheVoxelsMortonCodes) {
+  const Surface s = WavySurface(40, 2);
+  const auto blocks = *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 12.0);
+  const std::span<const uint64_t> fewer(s.morton.data(), s.morton.size() - 1);
+  for (const uint8_t version : {uint8_t{3}, uint8_t{4}}) {
+    const auto stream = *SerializeBlocksAsVersion(s.colors, blocks, BlockLayout::kVariableRate, version, s.morton);
+    const auto missing = BlockColorDecoder::Open(stream, s.colors.size()).status();
+    EXPECT_EQ(missing.code(), StatusCode::kCorrupt) << missing.ToString();
+    EXPECT_EQ(BlockColorDecoder::Open(stream, s.colors.size(), fewer).status().code(), StatusCode::kCorrupt);
+    EXPECT_FALSE(SerializeBlocksAsVersion(s.colors, {}, BlockLayout::kVariableRate, version, fewer).ok());
+  }
+}
+
+TEST(BlockStreamSpatial, CorruptStreamsAreErrorsNotCrashes) {
+  const Surface s = WavySurface(60, 3);
+  const auto blocks = *EncodeBlocks(s.colors, BlockLayout::kVariableRate, 10.0);
+  for (const uint8_t version : {uint8_t{3}, uint8_t{4}}) {
+    const auto stream = *SerializeBlocksAsVersion(s.colors, blocks, BlockLayout::kVariableRate, version, s.morton);
+    for (size_t len = 0; len < stream.size(); len += 1 + stream.size() / 200) {
+      EXPECT_FALSE(BlockColorDecoder::Open(std::span(stream).first(len), s.colors.size(), s.morton).ok()) << len;
+    }
+    std::mt19937 rng(4);
+    for (int trial = 0; trial < 300; ++trial) {
+      auto bad = stream;
+      bad[rng() % bad.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+      auto decoder = BlockColorDecoder::Open(bad, s.colors.size(), s.morton);
+      if (decoder.ok()) {
+        for (uint64_t i = 0; i < decoder->size(); i += 97) (void)decoder->At(i);  // in bounds, whatever it holds
+      }
+    }
+  }
+}
+
+// Leaf-mode sections (Morton codes given) are version 4, mipmap ones (none) version 2; both decode.
+TEST(BlockStreamSpatial, ColorSectionsPickTheirVersionByTheMortonCodes) {
   const Surface s = WavySurface(50, 5);
   for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
     auto leaf = EncodeColors(s.colors, {codec, 36.0}, s.morton);
     auto mip = EncodeColors(s.colors, {codec, 36.0});
     ASSERT_TRUE(leaf.ok() && mip.ok());
-    EXPECT_EQ(leaf->bytes[1], 3);
+    EXPECT_EQ(leaf->bytes[1], 4);
     EXPECT_EQ(mip->bytes[1], 2);
     EXPECT_GE(leaf->psnr.y, 36.0);
     EXPECT_EQ(*DecodeColors(leaf->bytes, s.colors.size(), s.morton), *DecodeColors(mip->bytes, s.colors.size()));
   }
 }
 
-// The fuzz seeds of version 3 hold the version 2 seeds' decoded colors, re-encoded exactly, for
+// The fuzz seeds of versions 3 and 4 hold the version 2 seeds' decoded colors, re-encoded exactly, for
 // voxels 0..count-1 in Morton order (the dense block the color fuzz targets give: color_fuzz_input.h).
-TEST(BlockStreamV3, FuzzSeedsHoldTheVersionTwoSeedsColors) {
+TEST(BlockStreamSpatial, FuzzSeedsHoldTheVersionTwoSeedsColors) {
   for (const char* name : {"color_vbr/vbrquality34coderzstd", "color_fixed3/fixed3quality34"}) {
     const std::filesystem::path base = std::filesystem::path(POINTDAG_SOURCE_DIR) / "fuzz/seeds" / name;
     const auto seed = [&](const char* suffix) { return testing::ReadBytes(base.string() + suffix); };
@@ -116,12 +129,14 @@ TEST(BlockStreamV3, FuzzSeedsHoldTheVersionTwoSeedsColors) {
     auto old = BlockColorDecoder::Open(std::span(v2).subspan(3), count);
     ASSERT_TRUE(old.ok()) << old.status().ToString();
     const std::vector<Rgb8> colors = old->DecodeAll();
-    const std::vector<uint8_t> v3 = seed("_v3.bin");
-    ASSERT_GT(v3.size(), 4u) << name;
-    EXPECT_EQ(v3[3], 3);
-    auto spatial = BlockColorDecoder::Open(std::span(v3).subspan(3), count, morton);
-    ASSERT_TRUE(spatial.ok()) << spatial.status().ToString();
-    EXPECT_EQ(spatial->DecodeAll(), colors) << name;
+    for (const uint8_t version : {uint8_t{3}, uint8_t{4}}) {
+      const std::vector<uint8_t> stream = seed(version == 3 ? "_v3.bin" : "_v4.bin");
+      ASSERT_GT(stream.size(), 4u) << name;
+      EXPECT_EQ(stream[3], version);
+      auto spatial = BlockColorDecoder::Open(std::span(stream).subspan(3), count, morton);
+      ASSERT_TRUE(spatial.ok()) << spatial.status().ToString();
+      EXPECT_EQ(spatial->DecodeAll(), colors) << name << " version " << int{version};
+    }
   }
 }
 
