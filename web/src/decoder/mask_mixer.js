@@ -10,7 +10,7 @@ import { newModels, youngP0, youngUpdate } from './range_coder.js';
 const KNOTS = Int32Array.from([1, 2, 4, 6, 10, 17, 27, 45, 74, 120, 194, 311, 488, 747, 1102, 1546, 2048, 2550, 2994,
   3349, 3608, 3785, 3902, 3976, 4022, 4051, 4069, 4079, 4086, 4090, 4092, 4094, 4095]);
 
-function squash(d) {
+export function squash(d) {
   const x = (d < -2047 ? -2047 : d > 2047 ? 2047 : d) + 2048;
   const i = x >> 7;
   const w = x & 127;
@@ -18,7 +18,7 @@ function squash(d) {
 }
 
 // Its inverse on 0..4095: the least d whose squash reaches p (2047 beyond).
-const STRETCH = new Int16Array(4096);
+export const STRETCH = new Int16Array(4096);
 {
   let next = 0;
   for (let d = -2047; d <= 2047; ++d) {
