@@ -44,9 +44,7 @@ class MaskMixer5 {
   static constexpr int kApmContexts = 8 * 8 * 8 * 4;
 
   MaskMixer5() : pattern_(kPatternBase[3][0]), outer_(8 * 2 * 128), apm_(size_t{kApmContexts} * 33) {
-    for (size_t cx = 0; cx < kApmContexts; ++cx) {
-      for (int j = 0; j < 33; ++j) apm_[cx * 33 + j] = static_cast<uint16_t>(std::clamp(Squash((j - 16) * 128), 1, 4095) * 16);
-    }
+    for (size_t cx = 0; cx < kApmContexts; ++cx) std::copy(kApmStart.begin(), kApmStart.end(), apm_.begin() + cx * 33);
   }
 
   // Codes child c's bit. `context`: the version 2 model; `so_far`: the mask bits below c; `ones`: any of
@@ -94,6 +92,12 @@ class MaskMixer5 {
 
  private:
   static constexpr int32_t kBias = 256;
+  // An APM row before training: the identity, P(1) at each bucket's d, in 1/65536.
+  static constexpr auto kApmStart = [] {
+    std::array<uint16_t, 33> t{};
+    for (int j = 0; j < 33; ++j) t[j] = static_cast<uint16_t>(std::clamp(Squash((j - 16) * 128), 1, 4095) * 16);
+    return t;
+  }();
   static constexpr int32_t kMaxWeight = 1 << 22;
   template <typename M>
   static int32_t Stretch(const M& m) { return kStretch[4096 - m.P0()]; }

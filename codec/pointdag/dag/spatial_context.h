@@ -268,7 +268,9 @@ inline Around Surroundings(const Level& lv, size_t i) {
     for (int o = 1; o < 7; ++o) {
       const auto& from = kPatternFrom[o][kPatternCompact[o][lower[o]]];
 #pragma GCC unroll 8
-      for (int c = 0; c < 8; ++c) out.pattern[c] = static_cast<uint16_t>(out.pattern[c] | from[c]);
+      for (int c = 0; c < 8; ++c) {
+        if ((o & c) == 0) out.pattern[c] = static_cast<uint16_t>(out.pattern[c] | from[c]);  // else from[c] is 0
+      }
     }
   }
   return out;

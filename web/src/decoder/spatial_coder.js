@@ -21,9 +21,9 @@ const REF_BASE = CLASSES;
 
 // The 8 child bits of cell i, child 0 first; a last bit that must be 1 is implied. `v2`: version
 // 2's contexts; `edges`: scratch; `mix`: version 3's and 4's mixer, `mix5` version 5's (null
-// before); `planes`: the plane memory's state per child (version 4 on); `s` (version 5): scratch
-// for the sides and pattern bits of each child, and the class group.
-function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes, mix5, s) {
+// before); `planes`: the plane memory's state per child (version 4 on); version 5: `side` and
+// `pattern`, scratch for each child's side and pattern bits, `group` the class group times 8.
+function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes, mix5, side, pattern, group) {
   const o = 6 * i;
   let exists = 0;
   let facing = 0;
@@ -38,7 +38,7 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes, mix5, s
     if (lv.nbr[o + 2 * axis + 1] >= 0) exists |= 8 << axis;
   }
   const sides = exists * 8;
-  const around = v2 ? (mix5 ? surroundings(lv, i, edges, s.side, s.pattern) : surroundings(lv, i, edges)) : 0;
+  const around = v2 ? surroundings(lv, i, edges, side, pattern) : 0;
   const most = v2 ? 1 : 3;
   let m = 0;
   let ones = 0;
@@ -51,8 +51,8 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes, mix5, s
       const model = base + ((ones * 8 + near) * 27 + SIDES[sides + c]) * 4 + extra;
       if (mix5) {
         const lower2 = ((below >> c) & 1) | ((below >> (7 + c)) & 2) | ((below >> (14 + c)) & 4);
-        const pattern = PATTERN_BASE[s.group * 8 + c] + (s.pattern[c] | PATTERN_SELF[c * 256 + m] | (lower2 << PATTERN_COUNT[c]));
-        bit = mix5.bit(rc, young, age, model, c, m, ones > 0, exists, planes[c], pattern, s.side[c], ((c * 8 + near) * 8 + lower2) * 4 + extra);
+        const index = PATTERN_BASE[group + c] + (pattern[c] | PATTERN_SELF[c * 256 + m] | (lower2 << PATTERN_COUNT[c]));
+        bit = mix5.bit(rc, young, age, model, c, m, ones > 0, exists, planes[c], index, side[c], ((c * 8 + near) * 8 + lower2) * 4 + extra);
       } else if (mix) {
         bit = mix.bit(rc, young, age, model, c, m, lv.parent[i], near, ones > 0, exists, planes[c]);
       } else {
@@ -71,7 +71,8 @@ export function decodeSpatial(rc, depth, counts, version) {
   const edges = new Int32Array(12);
   const mix5 = version >= 5 ? new MaskMixer5() : null;
   const mix = version >= 3 && !mix5 ? new MaskMixer(version >= 4) : null;
-  const scratch5 = { side: new Uint8Array(8), pattern: new Uint16Array(8), group: 0 };
+  const side = mix5 ? new Uint8Array(8) : null;
+  const pattern = mix5 ? new Uint16Array(8) : null;
   const slotsFrom = slotLevel(levels, version);
   const planes = version >= 4;
   const last = [null, null, null];
@@ -95,7 +96,7 @@ export function decodeSpatial(rc, depth, counts, version) {
     const internal = level < levels;
     // On a slot level every cell is first: as many nodes as cells, merged after the walk.
     const n = !internal ? 0 : level >= slotsFrom ? cur.n : counts[level];
-    scratch5.group = height <= 1 ? 0 : height === 2 ? 1 : 2;
+    const group = 8 * (height <= 1 ? 0 : height === 2 ? 1 : 2);
     const levelMasks = new Uint8Array(n);
     const first = new Uint32Array(n + 1);
     const kids = new GrowableU32(internal && level + 1 < levels ? Math.min(8 * n, 2 * counts[level + 1]) : 0);
@@ -110,7 +111,7 @@ export function decodeSpatial(rc, depth, counts, version) {
         continue;
       }
       if (planes) planeStates(last, cur.pos, i, states);
-      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges, mix, states, mix5, scratch5);
+      const mask = decodeMask(rc, young, age, maskBase, cur, i, v2, edges, mix, states, mix5, side, pattern, group);
       cur.mask[i] = mask;
       if (planes) planeRecord(last, cur.pos, i, mask);
       if (level > levels) {

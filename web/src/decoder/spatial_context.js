@@ -188,14 +188,23 @@ export function surroundings(lv, i, edges, side, pattern) {
     DIAGONAL_FROM[256 + m(nbr[o + 4])] | DIAGONAL_FROM[6 * 256 + m(edges[0])] |
     DIAGONAL_FROM[5 * 256 + m(edges[4])] | DIAGONAL_FROM[3 * 256 + m(edges[8])] | DIAGONAL_FROM[7 * 256 + m(lowerCorner)];
   if (pattern) {
-    pattern.fill(0);
-    // The lower cells at o = 1..6: −z, −y, −y−z, −x, −x−z, −x−y.
-    patternFrom(pattern, 1, m(nbr[o + 4]));
-    patternFrom(pattern, 2, m(nbr[o + 2]));
-    patternFrom(pattern, 3, m(edges[8]));
-    patternFrom(pattern, 4, m(nbr[o]));
-    patternFrom(pattern, 5, m(edges[4]));
-    patternFrom(pattern, 6, m(edges[0]));
+    // The lower cells at o = 1..6 (−z, −y, −y−z, −x, −x−z, −x−y) give bits only to the children
+    // on their side of each of o's axes (c & o = 0).
+    const from = PATTERN_FROM;
+    const z = (16 + PATTERN_COMPACT[256 + m(nbr[o + 4])]) * 8;
+    const y = (32 + PATTERN_COMPACT[512 + m(nbr[o + 2])]) * 8;
+    const yz = (48 + PATTERN_COMPACT[768 + m(edges[8])]) * 8;
+    const x = (64 + PATTERN_COMPACT[1024 + m(nbr[o])]) * 8;
+    const xz = (80 + PATTERN_COMPACT[1280 + m(edges[4])]) * 8;
+    const xy = (96 + PATTERN_COMPACT[1536 + m(edges[0])]) * 8;
+    pattern[0] = from[z] | from[y] | from[yz] | from[x] | from[xz] | from[xy];
+    pattern[1] = from[y + 1] | from[x + 1] | from[xy + 1];
+    pattern[2] = from[z + 2] | from[x + 2] | from[xz + 2];
+    pattern[3] = from[x + 3];
+    pattern[4] = from[z + 4] | from[y + 4] | from[yz + 4];
+    pattern[5] = from[y + 5];
+    pattern[6] = from[z + 6];
+    pattern[7] = 0;
   }
   return outer | (diagonal << 8);
 }
@@ -205,12 +214,6 @@ function edge(nbr, none, o, d1, d2) {
   const b = nbr[o + d2];
   const e = nbr[6 * (a < 0 ? none : a) + d2];
   return e >= 0 ? e : nbr[6 * (b < 0 ? none : b) + d1];
-}
-
-
-function patternFrom(pattern, o, mask) {
-  const at = (o * 16 + PATTERN_COMPACT[o * 256 + mask]) * 8;
-  for (let c = 0; c < 8; ++c) pattern[c] |= PATTERN_FROM[at + c];
 }
 
 // The next level's cells: children of the expanded cells, with their face neighbours.
