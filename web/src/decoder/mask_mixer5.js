@@ -35,8 +35,8 @@ export class MaskMixer5 {
     this.planesAge = new Uint8Array(256 * 27);
     this.pattern = new Uint16Array(PATTERN_BASE[24]).fill(32768);
     this.patternAge = new Uint8Array(PATTERN_BASE[24]);
-    this.outer = newModels(8 * 2 * 128);
-    this.outerAge = new Uint8Array(8 * 2 * 128);
+    this.side = newModels(8 * 2 * 128);
+    this.sideAge = new Uint8Array(8 * 2 * 128);
     this.apm = new Uint16Array(APM_CONTEXTS * 33);
     for (let k = 0; k < APM_CONTEXTS; ++k) this.apm.set(APM_START, 33 * k);
     this.w = new Int32Array(16 * 6);
@@ -56,7 +56,7 @@ export class MaskMixer5 {
     const s1 = STRETCH[4096 - youngP0(this.sides, f)];
     const s2 = STRETCH[4096 - youngP0(this.planes, g)];
     const s3 = STRETCH[4096 - compactP0(this.pattern, pattern)];
-    const s4 = STRETCH[4096 - youngP0(this.outer, q)];
+    const s4 = STRETCH[4096 - youngP0(this.side, q)];
     // Each product is below 2^33 and their sum below 2^36: exact in doubles; floor = the C++ shift.
     const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * s4 + w[wi + 5] * BIAS;
     let d = Math.floor(dot / 65536);
@@ -88,7 +88,7 @@ export class MaskMixer5 {
     youngUpdate(this.sides, this.sidesAge, f, bit);
     youngUpdate(this.planes, this.planesAge, g, bit);
     compactUpdate(this.pattern, this.patternAge, pattern, bit);
-    youngUpdate(this.outer, this.outerAge, q, bit);
+    youngUpdate(this.side, this.sideAge, q, bit);
     return bit;
   }
 }
