@@ -156,6 +156,18 @@ TEST(DagStream, SlotsOfHeightThreeMergeBackIntoTheDag) {
   }
 }
 
+// A DAG decoded from a hostile older stream may store a node of height 3 twice; version 5's decoder
+// would merge the two, so its encoder refuses such a DAG (as coder 2 refuses a repeated brick) and
+// version 4 still writes it. (The fuzzer's find: fuzz/regressions/dag_stream/.)
+TEST(DagStream, Version5RefusesARepeatedNodeOfHeightThree) {
+  std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/regressions/dag_stream/v4_repeated_height3_node.bin", std::ios::binary);
+  const std::vector<uint8_t> stream(std::istreambuf_iterator<char>(in), {});
+  ASSERT_EQ(stream.at(0), 4);
+  const Svdag dag = DecodeDag(stream).value();
+  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(DecodeDag(EncodeDag(dag, GeometryCoder::kSpatial, 4).value()).value(), dag);
+}
+
 TEST(DagStream, RejectsLyingHeaders) {
   const auto good = EncodeDag(Build(6, 2000, 4), GeometryCoder::kContext).value();
   auto bad = good;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <span>
+#include <utility>
 
 namespace pointdag {
 namespace {
@@ -14,6 +15,13 @@ size_t TableBits(uint64_t declared, size_t items) {
 }
 
 size_t Slot(uint64_t key, size_t bits) { return static_cast<size_t>(((key ^ (key >> 29)) * 0x9E3779B97F4A7C15ull) >> (64 - bits)); }
+
+// A node's mask and children as one 64-bit key (equal nodes, equal keys).
+uint64_t NodeKey(uint8_t mask, std::span<const uint32_t> kids) {
+  uint64_t key = mask;
+  for (uint32_t k : kids) key = (key ^ k) * 0x100000001B3ull;
+  return key;
+}
 
 // Equal bricks become one: `ids` takes each slot's brick number.
 Status MergeBricks(const std::vector<uint64_t>& slots, uint64_t declared, std::vector<uint64_t>& leaves, std::vector<uint32_t>& ids) {
@@ -51,9 +59,7 @@ Status MergeLevel(DagArrays& a, int level, uint64_t declared) {
   for (size_t j = 0; j < masks.size(); ++j) {
     const std::span<const uint32_t> own(kids.data() + pos, std::popcount(static_cast<unsigned>(masks[j])));
     pos += own.size();
-    uint64_t key = masks[j];
-    for (uint32_t k : own) key = (key ^ k) * 0x100000001B3ull;
-    size_t at = Slot(key, bits);
+    size_t at = Slot(NodeKey(masks[j], own), bits);
     const auto same = [&](uint32_t u) {
       return unique_masks[u] == masks[j] && std::equal(own.begin(), own.end(), unique_kids.begin() + starts[u]);
     };
@@ -75,6 +81,25 @@ Status MergeLevel(DagArrays& a, int level, uint64_t declared) {
 }
 
 }  // namespace
+
+bool SlotsStoredOnce(const DagArrays& arrays, int slot_level) {
+  for (int level = slot_level; level < static_cast<int>(arrays.masks.size()); ++level) {
+    const std::vector<uint8_t>& masks = arrays.masks[level];
+    std::vector<size_t> starts(masks.size() + 1, 0);
+    for (size_t k = 0; k < masks.size(); ++k) starts[k + 1] = starts[k] + std::popcount(static_cast<unsigned>(masks[k]));
+    const auto kids = [&](size_t k) { return std::span<const uint32_t>(arrays.children[level]).subspan(starts[k], starts[k + 1] - starts[k]); };
+    std::vector<std::pair<uint64_t, uint32_t>> keys(masks.size());
+    for (size_t k = 0; k < masks.size(); ++k) keys[k] = {NodeKey(masks[k], kids(k)), static_cast<uint32_t>(k)};
+    std::sort(keys.begin(), keys.end());
+    for (size_t k = 0; k + 1 < keys.size(); ++k) {
+      for (size_t j = k + 1; j < keys.size() && keys[j].first == keys[k].first; ++j) {
+        const uint32_t a = keys[k].second, b = keys[j].second;
+        if (masks[a] == masks[b] && std::equal(kids(a).begin(), kids(a).end(), kids(b).begin(), kids(b).end())) return false;
+      }
+    }
+  }
+  return true;
+}
 
 DagArrays ExpandSlots(const DagArrays& arrays, int slot_level) {
   DagArrays out = arrays;

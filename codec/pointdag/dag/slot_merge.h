@@ -19,6 +19,11 @@ namespace pointdag {
 // height 4 too another −0.03..−0.3 % (tiny −1.7 %); higher ones repeat too rarely on any scan.
 constexpr int SlotLevel(int levels, int version) { return version >= 5 && levels >= 2 ? std::max(levels - 2, 1) : levels; }
 
+// Whether every node of the internal levels from `slot_level` on is stored once (as the builder's
+// DAG stores it): the decoder merges equal ones, so only then does the same DAG come back. (One
+// decoded from a hostile stream of an older version or another coder may repeat a node.)
+bool SlotsStoredOnce(const DagArrays& arrays, int slot_level);
+
 // The encoder's view: `arrays` with the internal levels from `slot_level` on copied per occurrence
 // (their child ordinals then count up from 0 on every level; the bricks stay as they are).
 DagArrays ExpandSlots(const DagArrays& arrays, int slot_level);

@@ -227,6 +227,9 @@ StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth,
   }
   const int slot_level = SlotLevel(depth - 2, version);
   if (slot_level < depth - 2) {
+    if (!SlotsStoredOnce(arrays, slot_level)) {
+      return InvalidArgument("geometry coder 2 version 5 needs each node of heights 3 and 4 stored once: one repeats");
+    }
     const DagArrays tree = ExpandSlots(arrays, slot_level);
     slots.clear();
     for (uint32_t k : tree.children.back()) slots.push_back(tree.leaves[k]);
