@@ -20,6 +20,7 @@ RUN cmake -S . -B /build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPOINTDAG_B
  && cmake --build /build \
  && install -D -m 0755 /build/server/pointdagd /out/usr/local/bin/pointdagd \
  && install -D -m 0755 /build/tools/pointdag /out/usr/local/bin/pointdag \
+ && install -D -m 0644 /build/codec/libpointdag_pcl_reader.so /out/usr/local/lib/pointdag/libpointdag_pcl_reader.so \
  && mkdir -p /out/usr/local/share/pointdag/web \
  && cp -r /build/web/index.html /build/web/assets /out/usr/local/share/pointdag/web/ \
  && install -D -m 0644 configs/container.toml /out/etc/pointdag/pointdagd.toml

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <string>
 
+#include "pointdag/read/pcl_reader.h"
 #include "pointdag/read/scan_reader.h"
 
 namespace pointdag::fuzz {
@@ -26,6 +27,11 @@ inline const std::filesystem::path& ScratchFile(const char* target) {
   }();
   return path;
 }
+
+// PCL's reader is a module loaded on first use (pcl_reader.h). The PLY and PCD targets load it from
+// LLVMFuzzerInitialize, before libFuzzer starts, so that its coverage counts from the first input
+// (opening a missing file loads the module, then fails).
+inline void LoadPclReader() { (void)OpenPclScan("/nonexistent/pointdag-fuzz.pcd", ScanFormat::kPcd); }
 
 inline int FuzzScanFile(const char* target, const uint8_t* data, size_t size) {
   const std::filesystem::path& path = ScratchFile(target);

@@ -178,7 +178,10 @@ std::vector<std::filesystem::path> ScansIn(const std::string& dir) {
 
 }  // namespace
 
-// The daemon's pipeline (read, georeference, voxelize, tile, Draco) on one scan at its derived voxel size.
+// The daemon's pipeline (read, georeference, voxelize, tile, Draco) on one scan at its derived voxel
+// size, twice in this process: the first as a freshly started daemon's first upload (PROJ resolves
+// the CRS, the allocator and page cache are cold), the second as a running daemon ingests (the
+// stage times, total and points/s are the second's; "first_total_s" is the first's).
 nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_points_in_memory) {
   malloc_trim(0);
   std::ofstream("/proc/self/clear_refs") << "5";
@@ -188,6 +191,12 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
   // Lone Star's stored CRS is wrong, in its LAS and in its LAZ/COPC copies alike (UTM 12N is right).
   const std::string name = scan.filename().string();
   if (name.find("lone_star") != std::string::npos || name.find("lone-star") != std::string::npos) options.epsg = 26912;
+  double first_seconds = 0;
+  {  // freed before the second run
+    auto first = IngestScan(scan, options);
+    if (!first.ok()) return {{"scan", scan.filename().string()}, {"error", first.status().ToString()}};
+    first_seconds = first->seconds;
+  }
   auto ingested = IngestScan(scan, options);
   if (!ingested.ok()) return {{"scan", scan.filename().string()}, {"error", ingested.status().ToString()}};
   const uint64_t peak = RssAndPeak().second;
@@ -217,6 +226,7 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
           {"voxelize_s", ingested->voxelize_seconds},
           {"tile_s", ingested->tile_seconds},
           {"draco_s", ingested->compare_seconds},
+          {"first_total_s", first_seconds},
           {"total_s", ingested->seconds},
           {"points_per_s", points / ingested->seconds},
           {"peak_rss_over_baseline_bytes", peak - baseline}};
@@ -226,11 +236,13 @@ namespace {
 
 int RunIngestBench(const BenchOptions& options) {
   if (!options.json) {
-    std::printf("machine: %s; IngestScan as pointdagd runs it (derived voxel, VBR tiles at 38 dB, Draco kd-tree level 10)\n",
+    std::printf("machine: %s; IngestScan as pointdagd runs it (derived voxel, VBR tiles at 38 dB, Draco kd-tree level 10),\n"
+                "twice per scan in one process: stage times, total and Mpt/s of the second (a running daemon), first upload s\n"
+                "of the first (a freshly started one)\n",
                 MachineName().c_str());
     std::printf("| scan | points | ENU | voxel | voxels | levels | tiles | all levels b/pt | finest b/vox | Draco b/pt | "
-                "voxelize s | tile s | Draco s | total s | Mpt/s | peak RSS MiB (net) |\n|");
-    for (int i = 0; i < 16; ++i) std::printf("---|");
+                "voxelize s | tile s | Draco s | total s | Mpt/s | first upload s | peak RSS MiB (net) |\n|");
+    for (int i = 0; i < 17; ++i) std::printf("---|");
     std::printf("\n");
   }
   for (const auto& scan : ScansIn(options.data_dir)) {
@@ -243,13 +255,13 @@ int RunIngestBench(const BenchOptions& options) {
       std::printf("| %s | error: %s |\n", scan.filename().c_str(), r["error"].get<std::string>().c_str());
       continue;
     }
-    std::printf("| %s | %llu | %s | %g | %llu | %d | %llu | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f |\n",
+    std::printf("| %s | %llu | %s | %g | %llu | %d | %llu | %.2f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.1f |\n",
                 scan.filename().c_str(), r["points"].get<unsigned long long>(), r["georeferenced"].get<bool>() ? "yes" : "no",
                 r["voxel"].get<double>(), r["voxels"].get<unsigned long long>(), r["levels"].get<int>(),
                 r["tiles"].get<unsigned long long>(), r["all_levels_bits_per_point"].get<double>(),
                 r["finest_bits_per_voxel"].get<double>(), r["draco_bits_per_point"].get<double>(), r["voxelize_s"].get<double>(),
                 r["tile_s"].get<double>(), r["draco_s"].get<double>(), r["total_s"].get<double>(),
-                r["points_per_s"].get<double>() / 1e6, r["peak_rss_over_baseline_bytes"].get<double>() / (1024.0 * 1024.0));
+                r["points_per_s"].get<double>() / 1e6, r["first_total_s"].get<double>(), r["peak_rss_over_baseline_bytes"].get<double>() / (1024.0 * 1024.0));
     std::fflush(stdout);
   }
   return 0;

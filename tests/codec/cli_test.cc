@@ -210,5 +210,28 @@ TEST(Cli, WithoutAVulkanDeviceAutoUsesTheCpuAndVulkanIsAClearError) {
   EXPECT_NE(unknown.err.find("POINTDAG_DEVICE must be auto, vulkan or cpu, not 'gpu'"), std::string::npos) << unknown.err;
 }
 
+// PCL's reader is a module loaded on first use (read/pcl_reader.h): an ASCII PLY is read through it,
+// one our own reader also takes never loads it, and where the module cannot be loaded the PLY that
+// needs it is exit 1 naming it, not a crash.
+TEST(Cli, AnAsciiPlyIsReadThroughThePclModuleAndItsAbsenceIsAClearError) {
+  ScratchDir dir;
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  ply += "0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n";
+  testing::WriteBytes(dir / "ascii.ply", std::vector<uint8_t>(ply.begin(), ply.end()));
+  const std::string encode = "encode " + (dir / "ascii.ply").string() + " --voxel 1 --lossless -o ";
+  const CliRun read = Cli(encode + (dir / "a.pdag").string(), dir);
+  ASSERT_EQ(read.exit_code, 0) << read.err;
+  const CliRun info = Cli("info " + (dir / "a.pdag").string() + " --json", dir);
+  EXPECT_EQ(nlohmann::json::parse(info.out, nullptr, false).value("voxels", 0), 3) << info.out;
+  EXPECT_NE(info.out.find("\"version\": \"ascii\""), std::string::npos) << info.out;
+
+  const CliRun missing = Cli(encode + (dir / "b.pdag").string(), dir, "POINTDAG_PCL_READER=" + (dir / "none.so").string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("needs PCL's reader, libpointdag_pcl_reader.so, which could not be loaded"), std::string::npos)
+      << missing.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "b.pdag"));
+}
+
 }  // namespace
 }  // namespace pointdag

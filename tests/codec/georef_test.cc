@@ -2,6 +2,9 @@
 
 #include <GeographicLib/Geocentric.hpp>
 #include <cmath>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "pointdag/georef/georeference.h"
 #include "pointdag/pipeline.h"
@@ -118,6 +121,46 @@ TEST(Georeference, UnknownCrsIsAnError) {
   auto geo = Georeferencer::Create("EPSG:999999", "epsg-override", {0, 0, 0});
   EXPECT_EQ(geo.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(geo.status().message().find("unknown CRS"), std::string::npos);
+}
+
+// A CRS is resolved once per process and its operation cloned for every later Georeferencer: those
+// made at once on several threads, for other centres, transform exactly as a first one does, and a
+// CRS that failed is not remembered as resolved.
+TEST(Georeference, GeoreferencersOfOneCrsMadeOnManyThreadsAgree) {
+  const std::string wkt = [] {
+    auto first = Georeferencer::Create("EPSG:2154", "epsg-override", {650000, 6860000, 100});
+    EXPECT_TRUE(first.ok());
+    return first.ok() ? (*first)->frame().crs_wkt : std::string();
+  }();
+  ASSERT_FALSE(wkt.empty());
+  const auto transform = [](const Georeferencer& g, std::array<double, 3> p) {
+    EXPECT_TRUE(g.ToEnu(std::span(&p, 1)).ok());
+    return p;
+  };
+  auto reference = Georeferencer::Create(wkt, "las-wkt", {870500, 6618500, 60});
+  ASSERT_TRUE(reference.ok()) << reference.status().ToString();
+  const std::array<double, 3> point = {870600, 6618400, 75};
+  const std::array<double, 3> expected = transform(**reference, point);
+  std::vector<std::thread> threads;
+  std::vector<std::array<double, 3>> got(8);
+  std::vector<std::string> names(8);
+  for (size_t t = 0; t < got.size(); ++t) {
+    threads.emplace_back([&, t] {
+      auto g = Georeferencer::Create(wkt, "las-wkt", {870500, 6618500, 60});
+      if (!g.ok()) return;
+      names[t] = (*g)->frame().crs_name;
+      got[t] = transform(**g, point);
+    });
+  }
+  for (auto& thread : threads) thread.join();
+  for (size_t t = 0; t < got.size(); ++t) {
+    EXPECT_EQ(names[t], (*reference)->frame().crs_name);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(got[t][a], expected[a]) << "thread " << t << " axis " << a;
+  }
+  EXPECT_EQ((*reference)->frame().epsg, 2154);
+  // 100 m east and 100 m south of the origin, in a conformal projection (turned by the meridians' convergence).
+  EXPECT_NEAR(std::hypot(expected[0], expected[1]), 100 * std::sqrt(2.0), 0.2);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(Georeferencer::Create("EPSG:999999", "epsg-override", {0, 0, 0}).status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(Georeference, FindsTheCrsOfEachSharedScan) {

@@ -1,12 +1,16 @@
-// The lossless colors section (codec 1): version 2, the context coder predicted from decoded
-// neighbours (lossless_context.h), on edge cases and hostile bytes; version 1 (zstd) still decodes.
+// The lossless colors section (codec 1): versions 3 (written) and 2, the context coders predicting
+// from decoded neighbours (lossless_context.h), on edge cases and hostile bytes; version 1 (zstd)
+// still decodes.
 // The real scans' round trips are in color_test.cc (LosslessTest).
 #include <gtest/gtest.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
+#include <utility>
 
+#include "pointdag/color/causal_neighbours.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/lossless_context.h"
 #include "pointdag/entropy/varint.h"
@@ -40,13 +44,48 @@ std::vector<Rgb8> RandomColors(size_t n, uint32_t seed) {
   return c;
 }
 
+// The section of codec 1 with a version-2 or -3 payload.
+std::vector<uint8_t> LosslessSection(const std::vector<Rgb8>& colors, const std::vector<uint64_t>& morton, int version) {
+  auto payload = EncodeLosslessContext(colors, morton, version);
+  EXPECT_TRUE(payload.ok()) << payload.status().ToString();
+  std::vector<uint8_t> section = payload.ok() ? *payload : std::vector<uint8_t>{};
+  section.insert(section.begin(), static_cast<uint8_t>(ColorCodec::kLossless));
+  return section;
+}
+
 void ExpectRoundTrip(const std::vector<Rgb8>& colors, const std::vector<uint64_t>& morton) {
   auto encoded = EncodeColors(colors, {ColorCodec::kLossless, std::nullopt}, morton);
   ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
-  EXPECT_EQ(encoded->bytes[0], static_cast<uint8_t>(ColorCodec::kLossless));
-  auto decoded = DecodeColors(encoded->bytes, colors.size(), morton);
-  ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
-  EXPECT_EQ(*decoded, colors);
+  EXPECT_EQ(encoded->bytes, LosslessSection(colors, morton, kLosslessContextVersion));
+  for (int version : {2, 3}) {
+    auto decoded = DecodeColors(LosslessSection(colors, morton, version), colors.size(), morton);
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_EQ(*decoded, colors) << "version " << version;
+  }
+}
+
+// The bricks find what a search of every earlier voxel finds, at the grid's edges too.
+TEST(LosslessColors, CausalNeighboursAreEveryEarlierVoxelInTheShell) {
+  std::vector<uint64_t> clustered = SheetMorton(1500, 10);
+  std::mt19937 rng(11);
+  std::set<uint64_t> cloud(clustered.begin(), clustered.end());
+  while (cloud.size() < 3000) cloud.insert(MortonEncode(static_cast<uint32_t>(rng() % 12), static_cast<uint32_t>(rng() % 12), static_cast<uint32_t>(rng() % 12)));
+  const std::vector<uint64_t> morton(cloud.begin(), cloud.end());
+  const CausalNeighbours neighbours(morton);
+  for (const auto& [inner, outer] : {std::pair{0, 2}, std::pair{2, 4}, std::pair{0, 4}}) {
+    for (size_t i = 0; i < morton.size(); ++i) {
+      std::set<std::pair<size_t, int>> found, expected;
+      neighbours.ForEach(i, inner, outer, [&](size_t j, int d2) { EXPECT_TRUE(found.insert({j, d2}).second); });
+      const auto [x, y, z] = MortonDecode(morton[i]);
+      for (size_t j = 0; j < i; ++j) {
+        const auto [a, b, c] = MortonDecode(morton[j]);
+        const int64_t dx = int64_t{a} - x, dy = int64_t{b} - y, dz = int64_t{c} - z;
+        const int64_t far = std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
+        if (far > inner && far <= outer) expected.insert({j, static_cast<int>(dx * dx + dy * dy + dz * dz)});
+      }
+      ASSERT_EQ(found, expected) << "voxel " << i << ", shell " << inner << ".." << outer;
+    }
+  }
 }
 
 TEST(LosslessColors, EdgeCasesRoundTripWithAndWithoutNeighbours) {
@@ -93,11 +132,25 @@ TEST(LosslessColors, Version1ZstdSectionsStillDecode) {
   EXPECT_EQ(*decoded, colors);
 }
 
-TEST(LosslessColors, HostileSectionsAreCleanErrors) {
+TEST(LosslessColors, OnlyKnownVersionsAreWrittenOrRead) {
+  const auto morton = DenseMorton(100);
+  const auto colors = RandomColors(morton.size(), 9);
+  EXPECT_EQ(EncodeLosslessContext(colors, morton, 1).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeLosslessContext(colors, morton, 4).status().code(), StatusCode::kInvalidArgument);
+  auto section = LosslessSection(colors, morton, 3);
+  for (int version : {0, 1, 4, 255}) {
+    section[1] = static_cast<uint8_t>(version);
+    EXPECT_FALSE(DecodeColors(section, colors.size(), morton).ok()) << version;
+  }
+}
+
+class LosslessHostileTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(LosslessHostileTest, HostileSectionsAreCleanErrors) {
   const auto morton = SheetMorton(2000, 6);
   std::vector<Rgb8> colors = RandomColors(morton.size(), 7);
   for (size_t i = 0; i < colors.size(); i += 3) colors[i] = {100, 100, 100};
-  const auto section = EncodeColors(colors, {ColorCodec::kLossless, std::nullopt}, morton)->bytes;
+  const auto section = LosslessSection(colors, morton, GetParam());
 
   // Neighbour mode needs the geometry's codes, and as many as there are colors.
   EXPECT_EQ(DecodeColors(section, colors.size()).status().code(), StatusCode::kCorrupt);
@@ -125,11 +178,13 @@ TEST(LosslessColors, HostileSectionsAreCleanErrors) {
   bad_mode[2] = 7;
   EXPECT_EQ(DecodeColors(bad_mode, colors.size(), morton).status().code(), StatusCode::kCorrupt);
   const uint64_t huge = uint64_t{1} << 31;
-  std::vector<uint8_t> lie = {static_cast<uint8_t>(ColorCodec::kLossless), 2, 0};
+  std::vector<uint8_t> lie = {static_cast<uint8_t>(ColorCodec::kLossless), static_cast<uint8_t>(GetParam()), 0};
   PutVarint(lie, huge);
   lie.insert(lie.end(), {0, 0, 0, 0, 0});
   EXPECT_EQ(DecodeColors(lie, huge).status().code(), StatusCode::kCorrupt);
 }
+
+INSTANTIATE_TEST_SUITE_P(Versions, LosslessHostileTest, ::testing::Values(2, 3));
 
 }  // namespace
 }  // namespace pointdag

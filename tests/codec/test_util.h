@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -173,6 +174,17 @@ struct ScanFileName {
     } else {
       name = param_info.param.file;
     }
+    for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    return name;
+  }
+};
+
+// The same with the voxel size, for lists that hold a scan at several: "..._las_at_0_25".
+struct ScanFileAndVoxelName {
+  std::string operator()(const ::testing::TestParamInfo<ScanAtVoxel>& param_info) const {
+    std::ostringstream voxel;
+    voxel << param_info.param.voxel;
+    std::string name = std::string(param_info.param.file) + "_at_" + voxel.str();
     for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
     return name;
   }

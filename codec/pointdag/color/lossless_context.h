@@ -1,14 +1,16 @@
-// The lossless colors' context-modelled coder (colors section codec 1, version 2; proto/PDAG_FORMAT.md
-// §3). Colors are coded in their order, each predicted from colors already coded:
+// The lossless colors' context-modelled coder (colors section codec 1, versions 2 and 3;
+// proto/PDAG_FORMAT.md §3). Colors are coded in their order, each predicted from colors already coded:
 //  - with the voxels' Morton codes ("neighbour" mode), from the voxel's face, edge and corner
 //    neighbours that precede it in Morton order (x-1, y-1, z-1 always do), found by code, weighted
 //    by nearness (two weightings; the one that missed less on the adjacent voxels predicts); with
 //    none within 2 voxels, from those within 4; with none at all, from the previous voxel;
 //  - without them (mipmap colors, whose order is not the voxels'), from the previous color.
 // G is predicted first; R and B as G plus the neighbours' mean R-G and B-G plus a running
-// least-squares share of G's residual, so the error they share with G is not paid twice. Each residual is a zigzag gamma code on the adaptive
-// binary range coder, its models chosen by how much the neighbours disagree (and, for R and B, by
-// G's residual): flat areas and edges learn separate statistics.
+// least-squares share of G's residual, so the error they share with G is not paid twice. In version
+// 2 each residual is a zigzag gamma code on the adaptive binary range coder, its models chosen by
+// how much the neighbours disagree (and, for R and B, by G's residual): flat areas and edges learn
+// separate statistics. Version 3 (lossless_mixing.h, what the encoder writes) mixes several such
+// contexts per binary decision and reaches further for sparse voxels.
 #pragma once
 
 #include <cstdint>
@@ -20,11 +22,15 @@
 
 namespace pointdag {
 
-// `morton`: empty (previous-color mode) or one code per color, sorted and unique (neighbour mode).
-// The payload after the codec byte: version, mode, count, range-coded residuals.
-StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton);
+constexpr int kLosslessContextVersion = 3;
 
-// True when `payload` is this coder's (version 2), not the zstd planes of version 1.
+// `morton`: empty (previous-color mode) or one code per color, sorted and unique (neighbour mode).
+// The payload after the codec byte: version, mode, count, range-coded residuals. `version` 2 only
+// to test that older files still decode.
+StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                                     int version = kLosslessContextVersion);
+
+// True when `payload` is this coder's (version 2 or 3), not the zstd planes of version 1.
 bool IsLosslessContextPayload(std::span<const uint8_t> payload);
 
 // `count` from the decoded geometry; a neighbour-mode payload needs `morton` with `count` codes

@@ -177,10 +177,13 @@ class PclScanReader final : public ScanReader {
 
 }  // namespace
 
-StatusOr<std::unique_ptr<ScanReader>> OpenPclScan(const std::filesystem::path& path, ScanFormat format) {
-  auto reader = std::make_unique<PclScanReader>();
-  RETURN_IF_ERROR(reader->Load(path, format));
-  return std::unique_ptr<ScanReader>(std::move(reader));
-}
-
 }  // namespace pointdag
+
+// The module's one exported symbol (the rest is hidden: -fvisibility=hidden).
+extern "C" __attribute__((visibility("default"))) void pointdag_open_pcl_scan(
+    const char* path, pointdag::ScanFormat format, pointdag::StatusOr<std::unique_ptr<pointdag::ScanReader>>* out) {
+  auto reader = std::make_unique<pointdag::PclScanReader>();
+  const pointdag::Status loaded = reader->Load(path, format);
+  *out = loaded.ok() ? pointdag::StatusOr<std::unique_ptr<pointdag::ScanReader>>(std::move(reader))
+                     : pointdag::StatusOr<std::unique_ptr<pointdag::ScanReader>>(loaded);
+}

@@ -11,15 +11,6 @@
 
 namespace pointdag {
 
-const char* ScanFormatName(ScanFormat format) {
-  switch (format) {
-    case ScanFormat::kLas: return "LAS";
-    case ScanFormat::kPly: return "PLY";
-    case ScanFormat::kPcd: return "PCD";
-  }
-  return "?";
-}
-
 StatusOr<std::unique_ptr<ScanReader>> OpenScan(const std::filesystem::path& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) return IoError("cannot open " + path.string());

@@ -22,7 +22,14 @@
 namespace pointdag {
 
 enum class ScanFormat { kLas, kPly, kPcd };  // LAZ and COPC are kLas with `compression` set
-const char* ScanFormatName(ScanFormat format);
+constexpr const char* ScanFormatName(ScanFormat format) {
+  switch (format) {
+    case ScanFormat::kLas: return "LAS";
+    case ScanFormat::kPly: return "PLY";
+    case ScanFormat::kPcd: return "PCD";
+  }
+  return "?";
+}
 
 struct Bounds {
   std::array<double, 3> min{0, 0, 0};

@@ -1,0 +1,156 @@
+#include "pointdag/color/lossless_mixing.h"
+
+#include <algorithm>
+#include <array>
+#include <memory>
+
+#include "pointdag/color/lossless_predict.h"
+#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/logistic.h"
+
+namespace pointdag::lossless {
+namespace {
+
+// A residual e (-128..127; a decoder may read -255..255, wrapped alike) as binary decisions: e = 0?,
+// e < 0?, then the bit length L of |e| in unary ("L > l?" for l = 1..7, none after 8), the mixed
+// decisions; then the L - 1 bits below |e|'s leading one, each with one plain model.
+constexpr int kMixedDecisions = 9, kModels = 4, kMixContexts = 8, kMaxLength = 8;
+
+// One channel's coder: each mixed decision's probability is the logistic mix of four context
+// models' (the caller picks their contexts per residual) and a bias, with weights per decision and
+// mixing context, trained on every bit.
+class ChannelCoder {
+ public:
+  // Contexts per model.
+  explicit ChannelCoder(const std::array<int, kModels>& sizes) {
+    for (int k = 0; k < kModels; ++k) models_[k].resize(static_cast<size_t>(sizes[k]) * kMixedDecisions);
+    for (auto& w : weights_) w = {kInitialWeight, kInitialWeight, kInitialWeight, kInitialWeight, 0};
+  }
+  std::array<int, kModels> context{};
+  int mix_context = 0;  // 0..7
+
+  template <class Io>
+  int Code(Io& io, int e) {
+    if (Bit(io, 0, e == 0)) return 0;
+    const int negative = Bit(io, 1, e < 0);
+    const int magnitude = std::abs(e);
+    const int length = std::bit_width(static_cast<unsigned>(magnitude));
+    int l = 1;
+    while (l < kMaxLength && Bit(io, 1 + l, length > l)) ++l;
+    int v = 1;
+    for (int j = 0; j < l - 1; ++j) {
+      SteadyBitModel& m = plain_[((l - 2) * (kMaxLength - 1) + j) * kMixContexts + mix_context];
+      v = v << 1 | io.Bit(m, (magnitude >> (l - 2 - j)) & 1);
+    }
+    return negative ? -v : v;
+  }
+
+ private:
+  static constexpr int32_t kInitialWeight = 65536 * 3 / (2 * kModels), kBias = 256, kMaxWeight = 1 << 22;
+
+  template <class Io>
+  int Bit(Io& io, int decision, int truth) {
+    std::array<SteadyBitModel*, kModels> m;
+    std::array<int32_t, kModels + 1> st;
+    for (int k = 0; k < kModels; ++k) {
+      m[k] = &models_[k][static_cast<size_t>(context[k]) * kMixedDecisions + decision];
+      st[k] = kStretch[4096 - m[k]->P0()];
+    }
+    st[kModels] = kBias;
+    std::array<int32_t, kModels + 1>& w = weights_[decision * kMixContexts + mix_context];
+    int64_t dot = 0;
+    for (int k = 0; k <= kModels; ++k) dot += int64_t{w[k]} * st[k];
+    const int32_t p1 = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
+    FixedP0 mixed{static_cast<uint32_t>(4096 - p1)};
+    const int bit = io.Bit(mixed, truth);
+    const int32_t err = (bit << 12) - p1;
+    for (int k = 0; k <= kModels; ++k) w[k] = std::clamp(w[k] + ((st[k] * err) >> 12), -kMaxWeight, kMaxWeight);
+    for (int k = 0; k < kModels; ++k) m[k]->Update(bit);
+    return bit;
+  }
+
+  std::array<std::vector<SteadyBitModel>, kModels> models_;
+  std::array<std::array<int32_t, kModels + 1>, kMixedDecisions * kMixContexts> weights_;
+  std::array<SteadyBitModel, (kMaxLength - 1) * (kMaxLength - 1) * kMixContexts> plain_{};
+};
+
+constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;
+
+// One loop for both sides: `io.Bit(model, bit)` writes the bit (encoder) or returns the decoded
+// one (decoder), and `colors[i]` is rebuilt from the residuals, so both see the same past.
+// The contexts, with s(x) = b₇(spread of x) + 7·unpredicted (b_k as Bucket) and eg, er the coded
+// residuals of G and R: G by s(G); s(G) and the previous voxel's |eg|; nothing; and the chroma's
+// and G's spreads. R (B alike, with its own spread) by s(R-G) and |eg|; s(R-G), eg's sign and |eg|;
+// nothing (for B: er); and G's spread and |eg|.
+template <class Io>
+void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
+  constexpr int s = 2 * kSpreadBuckets, r = kResidualBuckets;
+  auto g = std::make_unique<ChannelCoder>(std::array<int, kModels>{s, s * 8, 1, 64});
+  auto red = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 1, 8 * r});
+  auto blue = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 32, 8 * r});
+  Predictor predict(morton, 3);
+  Share share_r, share_b;
+  int last_eg = 0;
+  for (size_t i = 0; i < colors.size(); ++i) {
+    const Prediction p = predict(colors, i);
+    Rgb8& c = colors[i];
+    const int unpredicted = p.none ? kSpreadBuckets : 0;
+    const int sg = Bucket(p.spread_g, kSpreadBuckets) + unpredicted;
+    g->context = {sg, sg * 8 + Bucket(std::abs(last_eg), 8), 0, Bucket(p.spread_rg + p.spread_bg, 8) * 8 + Bucket(p.spread_g, 8)};
+    g->mix_context = std::min(kMixContexts - 1, sg);
+    const int eg = g->Code(io, Wrap(c.g - p.g));
+    c.g = static_cast<uint8_t>((p.g + eg) & 255);
+    last_eg = eg;
+    // G's miss unwrapped: what R and B share of it.
+    const int dg = c.g - p.g, aeg = Bucket(std::abs(eg), kResidualBuckets), seg = (eg > 0 ? 8 : 0) + Bucket(std::abs(eg), 8);
+    const uint8_t pr = Clamp(p.g + p.rg + share_r.Of(dg));
+    const int srg = Bucket(p.spread_rg, kSpreadBuckets) + unpredicted;
+    red->context = {srg * r + aeg, srg * 16 + seg, 0, Bucket(p.spread_g, 8) * r + aeg};
+    red->mix_context = std::min(kMixContexts - 1, srg);
+    const int er = red->Code(io, Wrap(c.r - pr));
+    c.r = static_cast<uint8_t>((pr + er) & 255);
+    const uint8_t pb = Clamp(p.g + p.bg + share_b.Of(dg));
+    const int sbg = Bucket(p.spread_bg, kSpreadBuckets) + unpredicted;
+    blue->context = {sbg * r + aeg, sbg * 16 + seg, std::min(15, std::abs(er)) * 2 + (er > 0 ? 1 : 0), Bucket(p.spread_g, 8) * r + aeg};
+    blue->mix_context = std::min(kMixContexts - 1, sbg);
+    const int eb = blue->Code(io, Wrap(c.b - pb));
+    c.b = static_cast<uint8_t>((pb + eb) & 255);
+    share_r.Learn(dg, c.r - (p.g + p.rg));
+    share_b.Learn(dg, c.b - (p.g + p.bg));
+    predict.Record(i, c);
+  }
+}
+
+struct EncodeIo {
+  BinaryRangeEncoder rc;
+  template <class Model>
+  int Bit(Model& m, int bit) {
+    rc.Encode(m, bit);
+    return bit;
+  }
+};
+
+struct DecodeIo {
+  BinaryRangeDecoder rc;
+  template <class Model>
+  int Bit(Model& m, int) {
+    return rc.Decode(m);
+  }
+};
+
+}  // namespace
+
+std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
+  std::vector<Rgb8> scratch(colors.begin(), colors.end());
+  EncodeIo io;
+  CodeColors(io, scratch, morton);
+  return io.rc.Finish();
+}
+
+bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
+  DecodeIo io{BinaryRangeDecoder(coded)};
+  CodeColors(io, colors, morton);
+  return io.rc.consumed_exactly();
+}
+
+}  // namespace pointdag::lossless
