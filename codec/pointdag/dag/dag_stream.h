@@ -14,8 +14,9 @@
 //   node's height and on the mask bits already coded (a bit-tree per height), flags on the height;
 // - kSpatial (the default): the range coder with contexts from each node's spatial neighbours,
 //   bricks coded at every occurrence and merged by the decoder (spatial_coder.h); stream version 3
-//   mixes three models per mask bit (mask_mixer.h), version 4 five: 2.7-3.5% below G-PCC's lossless
-//   octree on autzen and lion, 1.7% above on guanyin; decoding about 5x slower than kContext.
+//   mixes three models per mask bit (mask_mixer.h), version 4 five, version 5 five others with a
+//   secondary estimate (mask_mixer5.h) and codes the nodes of heights 3 and 4 at every occurrence
+//   too (slot_merge.h); decoding about 6x slower than kContext.
 // DecodeDag() runs in linear time (in the stored DAG plus its brick occurrences) and returns the
 // identical resident DAG.
 #pragma once
@@ -31,10 +32,10 @@ namespace pointdag {
 enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2 };
 const char* GeometryCoderName(GeometryCoder coder);
 
-// The stream version writers write (PDAG_FORMAT §2.2); 1..3 stay readable and writable: they
-// differ only in coder 2's mask bits, version 3's costing 1.6x the decode time of version 2's,
-// version 4's 1.2x version 3's.
-constexpr int kGeometryStreamVersion = 4;
+// The stream version writers write (PDAG_FORMAT §2.2); 1..4 stay readable and writable: they
+// differ only in coder 2, version 3's costing 1.6x the decode time of version 2's, version 4's 1.2x
+// version 3's, version 5's 1.2x version 4's.
+constexpr int kGeometryStreamVersion = 5;
 
 // `version`: 1..kGeometryStreamVersion.
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version = kGeometryStreamVersion);

@@ -54,6 +54,29 @@ struct YoungBitModel {
   }();
 };
 
+// One estimate where YoungBitModel keeps two: 4 bytes instead of 6, for large tables of sparse
+// contexts that rarely outgrow the young phase (geometry version 5's pattern model: its bits equal
+// to within 0.05 % of YoungBitModel's, the table two thirds the size). Moves by 1/(n+2) after n
+// updates until that is below 1/128.
+struct CompactYoungModel {
+  uint16_t p = 32768;  // P(bit = 0) in 1/65536
+  uint8_t n = 0;
+  uint32_t P0() const { return (uint32_t{p} >> 4) | 1u; }
+  void Update(int bit) {
+    const int32_t target = bit ? 0 : 65535;
+    p = static_cast<uint16_t>(p + (((target - p) * kRates[n]) >> 16));
+    if (n < kYoung) ++n;
+  }
+
+ private:
+  static constexpr int kYoung = 127;
+  static constexpr std::array<int32_t, kYoung + 1> kRates = [] {
+    std::array<int32_t, kYoung + 1> t{};
+    for (int i = 0; i <= kYoung; ++i) t[i] = std::max(65536 / (i + 2), 65536 >> 7);
+    return t;
+  }();
+};
+
 // A YoungBitModel whose slow estimate keeps slowing down to 1/1024 (1/(n+2) after n updates): for
 // statistics that hold over a whole scan, as the lossless colors' residuals do (lossless_mixing.cc:
 // 0.1-0.8 % fewer bits than stopping at 1/128).

@@ -16,8 +16,8 @@ export const MAX_DEPTH = 21;
 export const COUNT_LEAVES = 0;
 export const COUNT_MIPMAP = 1;
 
-// Versions 2..4 change coder 2's mask contexts only; versions 1..3 still decode.
-const STREAM_VERSION = 4;
+// Versions 2..5 change coder 2 only; versions 1..4 still decode.
+const STREAM_VERSION = 5;
 const CODER_ZSTD = 0;
 const CODER_CONTEXT = 1;
 const CODER_SPATIAL = 2;

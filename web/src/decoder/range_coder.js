@@ -30,6 +30,16 @@ export function youngUpdate(p, age, m, bit) {
   if (n < YOUNG) age[m] = n + 1;
 }
 
+// Compact young models (CompactYoungModel): one estimate p (P(bit = 0) in 1/65536) and an age per
+// model, moving by max(1/(n+2), 1/128).
+const COMPACT_RATE = Int32Array.from({ length: YOUNG + 1 }, (_, n) => Math.max(Math.floor(65536 / (n + 2)), 65536 >> 7));
+export const compactP0 = (p, m) => (p[m] >>> 4) | 1;
+export function compactUpdate(p, age, m, bit) {
+  const n = age[m];
+  p[m] += (((bit ? 0 : 65535) - p[m]) * COMPACT_RATE[n]) >> 16;
+  if (n < YOUNG) age[m] = n + 1;
+}
+
 // Bit tree of `bits` bits: models base+1 .. base+2^bits-1 (node 1, then node*2+bit).
 export const bitTreeModels = (bits) => 1 << bits;
 
