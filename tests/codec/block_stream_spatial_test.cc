@@ -8,6 +8,7 @@
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/block_target.h"
 #include "pointdag/color/color_codec.h"
 #include "pointdag/voxelize/morton.h"
 #include "test_util.h"
@@ -64,6 +65,28 @@ TEST(BlockStreamSpatial, VersionsTwoToFourDecodeToTheSameColorsEachInFewerBytes)
       EXPECT_EQ(spatial->DecodeAll(), colors);
       // Random access after Open: one color at a time, without its neighbours.
       for (uint64_t i = 0; i < colors.size(); i += 13) ASSERT_EQ(spatial->At(i), colors[i]) << i;
+    }
+  }
+}
+
+// The colors SerializeBlocks reports are the ones the stream decodes to (the encoder measures its
+// PSNR on them instead of decoding): every version, both layouts, weights chosen with and without
+// a rate price (BlocksForTarget's blocks are priced and refitted).
+TEST(BlockStreamSpatial, TheWriterRebuildsWhatTheDecoderDecodes) {
+  const Surface s = WavySurface(160, 5);
+  for (BlockLayout layout : {BlockLayout::kVariableRate, BlockLayout::kFixedRate}) {
+    const auto priced = BlocksForTarget(s.colors, {}, layout, 36.0);
+    ASSERT_TRUE(priced.ok()) << priced.status().ToString();
+    for (const auto& blocks : {*EncodeBlocks(s.colors, layout, 12.0), priced->blocks}) {
+      for (uint8_t version = 1; version <= kBlockStreamVersion; ++version) {
+        const std::span<const uint64_t> morton = version >= kFirstSpatialVersion ? std::span<const uint64_t>(s.morton) : std::span<const uint64_t>();
+        std::vector<Rgb8> rebuilt;
+        const auto stream = SerializeBlocksAsVersion(s.colors, blocks, layout, version, morton, &rebuilt);
+        ASSERT_TRUE(stream.ok()) << stream.status().ToString();
+        auto decoder = BlockColorDecoder::Open(*stream, s.colors.size(), morton);
+        ASSERT_TRUE(decoder.ok()) << decoder.status().ToString();
+        EXPECT_EQ(rebuilt, decoder->DecodeAll()) << "version " << int{version};
+      }
     }
   }
 }

@@ -219,12 +219,15 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                               BlockLayout layout, std::span<const uint64_t> morton) {
-  return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kFirstSpatialVersion - 1 : kBlockStreamVersion, morton);
+                                               BlockLayout layout, std::span<const uint64_t> morton,
+                                               std::vector<Rgb8>* decoded) {
+  return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kFirstSpatialVersion - 1 : kBlockStreamVersion,
+                                  morton, decoded);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                                        BlockLayout layout, uint8_t version, std::span<const uint64_t> morton) {
+                                                        BlockLayout layout, uint8_t version, std::span<const uint64_t> morton,
+                                                        std::vector<Rgb8>* decoded) {
   if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
   if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
     return InvalidArgument("color stream version " + std::to_string(version) + " needs one Morton code per color");
@@ -244,6 +247,7 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
   int prev_bits = 0;
   Rgb8 prev_a{};
   std::vector<uint8_t> weights(kMacroBlockColors);
+  if (decoded) decoded->resize(colors.size());
   const auto encode_difference = [&](std::array<GammaModel, 3>& m, int dr, int dg, int db) {
     const auto d = code.Components(dr, dg, db);
     for (int c = 0; c < 3; ++c) EncodeGamma(rc, m[c], ZigZag(d[c]), code.MaxBits());
@@ -283,11 +287,14 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
           const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
           EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
         }
-        if (spatial) spatial->Record(i, Interpolate(b.ends, w, b.bits));
+        const Rgb8 c = Interpolate(b.ends, w, b.bits);
+        if (spatial) spatial->Record(i, c);
+        if (decoded) (*decoded)[i] = c;
         prev_w = w;
       }
-    } else if (spatial) {
-      for (uint32_t i = b.start; i < b.start + b.length; ++i) spatial->Record(i, b.ends.a);
+    } else {
+      for (uint32_t i = b.start; spatial && i < b.start + b.length; ++i) spatial->Record(i, b.ends.a);
+      if (decoded) std::fill_n(decoded->begin() + b.start, b.length, b.ends.a);
     }
     prev_bits = b.bits;
     prev_a = b.ends.a;

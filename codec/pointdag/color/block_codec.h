@@ -62,8 +62,11 @@ StatusOr<gpu::VulkanContext*> ColorBlocksDevice();
 // (layout: proto/PDAG_FORMAT.md §3). `morton`: the voxels' Morton codes when `colors` are one per
 // voxel in Morton order (leaf mode; sorted, unique), which give the weights spatial contexts and
 // endpoint A a prediction from the decoded neighbours (stream version 4), else empty (version 2).
+// `decoded`, when given, receives the colors the stream decodes to (BlockColorDecoder's, the writer
+// rebuilds them as it goes), so that an encoder measures them without decoding the stream again.
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
-                                               BlockLayout layout, std::span<const uint64_t> morton = {});
+                                               BlockLayout layout, std::span<const uint64_t> morton = {},
+                                               std::vector<Rgb8>* decoded = nullptr);
 
 // Resident form for random access and batch decoding.
 class BlockColorDecoder {
