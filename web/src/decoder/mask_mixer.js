@@ -4,7 +4,7 @@
 // learnt per (child, any bit set so far); one set for all classes, fresh per stream. Version 4
 // mixes two more: (mask so far, which of the node's six face neighbours exist) and (mask so far,
 // the child's plane memory state).
-import { STRETCH, squash } from './logistic.js';
+import { SQUASH_TABLE, STRETCH, mixerDomain } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
 const BIAS = 256;
@@ -46,14 +46,8 @@ export class MaskMixer {
     const s2 = STRETCH[4096 - youngP0(this.par, q)];
     const s3 = this.more ? STRETCH[4096 - youngP0(this.sides, f)] : 0;
     const s4 = this.more ? STRETCH[4096 - youngP0(this.planes, g)] : 0;
-    // Each product is below 2^33 and their sum below 2^36: exact in doubles; floor = the C++ shift.
     const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * BIAS + w[wi + 4] * s3 + w[wi + 5] * s4;
-    let d = Math.floor(dot / 65536);
-    if (d < -2047) d = -2047;
-    else if (d > 2047) d = 2047;
-    let p1 = squash(d);
-    if (p1 < 1) p1 = 1;
-    else if (p1 > 4095) p1 = 4095;
+    const p1 = SQUASH_TABLE[mixerDomain(dot) + 2047];
     const bit = rc.fixedBit(4096 - p1);
     const err = (bit << 12) - p1;
     w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));

@@ -2,7 +2,7 @@
 // bit for bit: the version 2 neighbour model, version 4's sides and planes models, the child-level
 // pattern model and the side model mixed by integer logistic mixing (weights per child and any bit
 // set so far), then refined by an APM interpolated between 33 buckets and averaged 3:1 with the mix.
-import { STRETCH, squash } from './logistic.js';
+import { SQUASH_TABLE, STRETCH, mixerDomain, squash } from './logistic.js';
 import { compactP0, compactUpdate, newModels, youngP0, youngUpdate } from './range_coder.js';
 import { PATTERN_COUNT } from './spatial_context.js';
 
@@ -57,14 +57,9 @@ export class MaskMixer5 {
     const s2 = STRETCH[4096 - youngP0(this.planes, g)];
     const s3 = STRETCH[4096 - compactP0(this.pattern, pattern)];
     const s4 = STRETCH[4096 - youngP0(this.side, q)];
-    // Each product is below 2^33 and their sum below 2^36: exact in doubles; floor = the C++ shift.
     const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * s4 + w[wi + 5] * BIAS;
-    let d = Math.floor(dot / 65536);
-    if (d < -2047) d = -2047;
-    else if (d > 2047) d = 2047;
-    let p1 = squash(d);
-    if (p1 < 1) p1 = 1;
-    else if (p1 > 4095) p1 = 4095;
+    const d = mixerDomain(dot);
+    const p1 = SQUASH_TABLE[d + 2047];
     const x = d + 2048;
     const near = x & 127;
     const a = apm * 33 + (x >> 7);

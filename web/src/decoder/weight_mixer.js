@@ -5,7 +5,7 @@
 // previous; 48 + it two away), the previous weight, and the position in steps with the previous
 // weight's relation to it (else 64 + previous; 81 + them two away); mixer weights per (width,
 // depth in the tree).
-import { STRETCH, squash } from './logistic.js';
+import { SQUASH_TABLE, STRETCH, mixerDomain } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
 const MAX_WEIGHT_BITS = 4;
@@ -62,14 +62,8 @@ export class WeightMixer {
       const s2 = STRETCH[4096 - youngP0(c.p, m2)];
       const s3 = STRETCH[4096 - youngP0(d.p, m3)];
       const wi = (bits * MAX_WEIGHT_BITS + depth) * (INPUTS + 1);
-      // Each product is below 2^34 and their sum below 2^37: exact in doubles; floor = the C++ shift.
       const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * BIAS;
-      let dd = Math.floor(dot / 65536);
-      if (dd < -2047) dd = -2047;
-      else if (dd > 2047) dd = 2047;
-      let p1 = squash(dd);
-      if (p1 < 1) p1 = 1;
-      else if (p1 > 4095) p1 = 4095;
+      const p1 = SQUASH_TABLE[mixerDomain(dot) + 2047];
       const bit = rc.fixedBit(4096 - p1);
       const err = (bit << 12) - p1;
       w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
