@@ -2,8 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Block encoder, IIB's cut, bottom-up, one level per dispatch and one invocation per macro block:
 // a block's cost is its own (kTenthsPerSse x its error + scaled x its tenths of a bit) or its
-// children's, whichever is less (kKeep where its own; ties: the children). At the top level every block is open,
-// and the kept ones are marked for emission at their start.
+// children's, whichever is less (kKeep where its own; ties: the children). At the top level every
+// block is open, and the kept ones are marked for emission at their start.
 #include "block_common.glsl"
 layout(local_size_x = 64) in;
 
