@@ -29,10 +29,13 @@ layout(std430, binding = 1) buffer Prefix { uint prefix[]; };           // per m
 // Candidates, per macro and level, kMacro each: x start, y length | failed_with << 16,
 // z endpoint A | kKeep | kOpen, w endpoint B.
 layout(std430, binding = 2) buffer Levels { uvec4 cand[]; };
-// Per macro, kMacro each: during merging, x = 1 where candidate k merges with k + 1 (y, z its
-// endpoints); during the cut, at a block's start: x = 1 + level, y = its index at that level.
+// Per macro, kMacro each: during merging, x = 1 + (error >> 32) where candidate k merges with k + 1
+// (y, z its endpoints, w the error's low word); during the cut, at a block's start: x = 1 + level,
+// y = its index at that level.
 layout(std430, binding = 3) buffer Pairs { uvec4 pair[]; };
-layout(std430, binding = 4) buffer Costs { uint cost[]; };   // parallel to cand
+// Parallel to cand: a candidate's error (its fit's sse) while the tree is built; the cut replaces it
+// with the cheapest cost of coding it.
+layout(std430, binding = 4) buffer Costs { uint64_t cost[]; };
 layout(std430, binding = 5) buffer Counts { uint counts[]; };  // per macro and level
 layout(std430, binding = 6) buffer Blocks { uvec4 blocks[]; };  // per macro: kMacro, then its count at kMacro * macros + m
 layout(std430, binding = 7) buffer Merges { uint merges[]; };   // per slot: macro blocks that merged something
@@ -54,12 +57,17 @@ int BitWidth(uint64_t x) {
 ivec3 Unpack(uint c) { return ivec3(int(c & 255u), int((c >> 8) & 255u), int((c >> 16) & 255u)); }
 uint Pack(uint r, uint g, uint b) { return r | (g << 8) | (b << 16); }
 
-uint64_t MaxSse(uint length) {
-  const uint64_t scaled = uint64_t(params.threshold_lo) | (uint64_t(params.threshold_hi) << 32);
-  return uint64_t(length) * scaled;
-}
+// Threshold::scaled (block_codec.cc).
+uint64_t Scaled() { return uint64_t(params.threshold_lo) | (uint64_t(params.threshold_hi) << 32); }
+uint64_t MaxSse(uint length) { return uint64_t(length) * Scaled(); }
 
-uint BlockCost(uint length, uint bits) { return 150u + (bits != 0u ? 150u : 0u) + length * bits * 2u; }
+// block_codec.cc's RateTenths: a block's bits for the variable-rate tree and cut, in tenths of a bit.
+const uint kHeaderTenths = 1000u, kSecondEndTenths = 1000u;
+const uint64_t kTenthsPerSse = 20ul;
+uint WeightTenths(uint bits) { return bits == 0u ? 0u : bits == 1u ? 6u : bits == 2u ? 10u : bits == 3u ? 17u : 25u; }
+uint64_t RateTenths(uint length, uint bits) {
+  return uint64_t(kHeaderTenths + (bits != 0u ? kSecondEndTenths : 0u)) + uint64_t(length) * uint64_t(WeightTenths(bits));
+}
 
 void Shrink(inout i64vec3 v) {
   const int64_t largest = max(max(Abs64(v.x), Abs64(v.y)), Abs64(v.z));

@@ -18,6 +18,7 @@ void main() {
       const uint next_length = Length(cand[CandAt(m, level, i + 1u)]);
       const uvec4 p = pair[m * kMacro + i];
       if (p.x != 0u) {
+        cost[CandAt(m, level, out_n)] = (uint64_t(p.x - 1u) << 32) | uint64_t(p.w);
         cand[CandAt(m, level, out_n++)] = uvec4(here.x, Length(here) + next_length, p.y, p.z);
         merged = true;
         ++i;
@@ -25,6 +26,7 @@ void main() {
       }
       here.y = Length(here) | (next_length << 16);  // failed (now or before) with this neighbour
     }
+    cost[CandAt(m, level, out_n)] = cost[CandAt(m, level, i)];
     cand[CandAt(m, level, out_n++)] = here;
   }
   counts[CountAt(m, level)] = out_n;

@@ -1,7 +1,8 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 // Block encoder, first half of a merge pass: whether each block of a level merges with its right
-// neighbour within the threshold, one invocation per block. A pair that failed before and has not
+// neighbour, one invocation per block: within the threshold (IIA), or adding less error than the
+// header it saves is worth (IIB, VariableRateMacroBlock). A pair that failed before and has not
 // changed since is not fitted again (MergePasses' failed_with).
 #include "block_common.glsl"
 layout(local_size_x = 64) in;
@@ -13,9 +14,11 @@ void main() {
   uvec4 result = uvec4(0u);
   if (FailedWith(here) != Length(next)) {
     const uint length = Length(here) + Length(next);
-    const uint64_t limit = MaxSse(length);
+    const uint64_t saved = Scaled() * uint64_t(kHeaderTenths + (params.bits != 0u ? kSecondEndTenths : 0u)) / kTenthsPerSse;
+    const uint64_t limit = params.fixed_rate != 0u ? MaxSse(length)
+                                                   : cost[CandAt(m, level, k)] + cost[CandAt(m, level, k + 1u)] + saved;
     const Fit f = FitBlock(m, here.x, length, int(params.bits), limit);
-    if (f.sse <= limit) result = uvec4(1u, f.a, f.b, 0u);
+    if (f.sse <= limit) result = uvec4(1u + uint(f.sse >> 32), f.a, f.b, uint(f.sse));
   }
   pair[m * kMacro + k] = result;
 }

@@ -25,6 +25,7 @@ void main() {
     prefix[to + 7u] = prefix[from + 7u] + c.r * c.b;
     prefix[to + 8u] = prefix[from + 8u] + c.g * c.b;
     cand[CandAt(m, 0u, i)] = uvec4(i, 1u, packed, packed);  // a single color fits itself exactly
+    cost[CandAt(m, 0u, i)] = 0ul;
   }
   counts[CountAt(m, 0u)] = n;
 }

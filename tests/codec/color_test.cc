@@ -106,8 +106,10 @@ TEST_P(BlockCodecTest, DecoderReturnsTheEncodersOwnReconstructionAtEveryIndex) {
   const auto all = decoder->DecodeAll();
   ASSERT_EQ(all, expected);
   for (size_t i = 0; i < n; ++i) ASSERT_EQ(decoder->At(i), expected[i]) << "index " << i;
-  // Every block honours the threshold.
+  // Every fixed-rate block honours the threshold (variable-rate blocks weigh their error against
+  // their bits instead: block_codec.cc).
   for (const ColorBlock& b : blocks) {
+    if (layout == BlockLayout::kVariableRate) break;
     double sse = 0;
     for (uint32_t i = b.start; i < b.start + b.length; ++i) sse += BlockError(colors[i], expected[i]) / 1024.0;
     EXPECT_LE(sse / (3.0 * b.length), max_mse + 1e-9);
@@ -423,16 +425,19 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
   const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};
   // Block stream version 2 (endpoint differences as dG, dR - dG, dB - dG) and the cheaper fitter
-  // (2 power-iteration steps, no 1-bit merges); version 1 with the old fitter: 9596 and 9342. The
-  // VBR cut weighing a weight bit 0.4 bit (BlockCost, block_codec.cc; 0.8 before: 8990).
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 8898u);
+  // (2 power-iteration steps, no 1-bit merges); version 1 with the old fitter: 9596 and 9342. VBR:
+  // the tree and cut by rate and distortion, the threshold pricing bits (block_codec.cc); at one
+  // threshold that is a higher PSNR-Y than when it bounded every block (8898 then, with a weight
+  // bit at 0.4 bit in the cut; 0.8: 8990), at equal PSNR-Y smaller (docs/benchmarks.md).
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr)->bytes.size(), 10955u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed)->bytes.size(), 9157u);
   // Given the voxels' Morton codes, block stream version 4 (the weights' contexts from the decoded
   // neighbours, mixed with the previous weight's; endpoint A predicted from the neighbours:
   // block_stream_spatial_test.cc). Version 3 (the neighbours' context alone, A from the previous
   // block's): 7861 and 7804; VBR 7228 with the cut's weight bit at 0.8 bit; 7050 and 7210 before
-  // weights without any of the 26 neighbours took the cells two away.
-  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 7026u);
+  // weights without any of the 26 neighbours took the cells two away; VBR 7026 before the
+  // rate-distortion cut.
+  EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 8773u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7185u);
   // Lossless version 3 (decisions mixed from four context models, ±4 for voxels with few
   // neighbours, cell means for those with none): from neighbours found by Morton code, and from the previous color alone (mipmap

@@ -22,21 +22,22 @@
 namespace pointdag {
 namespace {
 
-// A candidate's fit is computed where a merge is tried (its error decides) and otherwise only once the
-// cut keeps it: the blocks a level starts from are never judged, and most of them merge away.
+// A candidate's fit is computed where a merge is tried or the cut weighs it, once.
 struct Candidate {
   uint32_t start, length;  // within the macro block
   std::optional<BlockFit> fit;
   uint32_t failed_with = 0;  // length of the right neighbour a merge with failed (it would fail again)
 };
 
-Endpoints EndsOf(const BlockFitter& fitter, const Candidate& c, int bits) {
-  return c.fit ? c.fit->ends : fitter.Fit(c.start, c.length, bits).ends;
+const BlockFit& FitOf(const BlockFitter& fitter, Candidate& c, int bits) {
+  if (!c.fit) c.fit = fitter.Fit(c.start, c.length, bits);
+  return *c.fit;
 }
 
-// A block passes when its mean error per channel, sse / (3 length) with sse the BlockError sum in
-// 1/1024ths, is within the threshold. In integers (so that the Vulkan port decides alike):
-// sse <= length * scaled, scaled = floor(3072 max_mse).
+// Fixed rate: a block passes when its mean error per channel, sse / (3 length) with sse the
+// BlockError sum in 1/1024ths, is within the threshold. Variable rate: the same number prices a
+// bit (VariableRateMacroBlock). In integers (so that the Vulkan port decides alike):
+// scaled = floor(3072 max_mse).
 struct Threshold {
   uint64_t scaled;
   explicit Threshold(double max_mse) : scaled(static_cast<uint64_t>(std::clamp(max_mse * 3072.0, 0.0, 1073741824.0))) {}
@@ -44,12 +45,13 @@ struct Threshold {
 };
 
 // Paper IIA's merge passes, from the given blocks, at `bits` per weight: each pass walks the blocks
-// and merges a block with its right neighbour where the merged block passes; a block merges at most
-// once per pass; passes repeat until one merges nothing. A pair that failed is not fitted again
-// while both blocks stay as they are. (Trying the left neighbour as well, as
-// IIA does, never changes anything here: a block's left neighbour is unmerged only when their
-// merge has just failed.)
-std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candidate> blocks, int bits, Threshold threshold) {
+// and merges a block with its right neighbour where the merged block's error is within
+// limit(block, neighbour); a block merges at most once per pass; passes repeat until one merges
+// nothing. A pair that failed is not fitted again while both blocks stay as they are. (Trying the
+// left neighbour as well, as IIA does, never changes anything here: a block's left neighbour is
+// unmerged only when their merge has just failed.)
+template <typename Limit>
+std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candidate> blocks, int bits, Limit limit_of) {
   for (bool merged_any = true; merged_any;) {
     merged_any = false;
     std::vector<Candidate> out;
@@ -57,7 +59,7 @@ std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candid
     for (size_t i = 0; i < blocks.size(); ++i) {
       if (i + 1 < blocks.size() && blocks[i].failed_with != blocks[i + 1].length) {
         const uint32_t length = blocks[i].length + blocks[i + 1].length;
-        const uint64_t limit = threshold.MaxSse(length);
+        const uint64_t limit = limit_of(blocks[i], blocks[i + 1]);
         const BlockFit fit = fitter.Fit(blocks[i].start, length, bits, limit);
         if (fit.sse <= limit) {
           out.push_back({blocks[i].start, length, fit});
@@ -81,30 +83,49 @@ std::vector<Candidate> Singletons(uint32_t count) {
   return blocks;
 }
 
-// What the cut weighs a block by: header 30 bits, second endpoint 30, each weight bit 0.4. Not the
-// stream's cost (block stream version 4 spends ~23, ~20 and 0.45-0.7 bits): the threshold search
-// undoes what the cut does, and keeping longer blocks with more weight bits measured smaller at
-// equal PSNR-Y. Weight bit 0.8 (before stream version 4): VBR at 34/38/42 dB 3-12 % larger on lion,
-// guanyin, autzen, milk and IGN at 25 cm; 0.6: 1-5 % larger; 0.2 (with a 60-bit header): smaller
-// still but chroma 1-5 dB lower (docs/benchmarks.md). In fifths of a bit, so that the cut is integer
-// arithmetic (the Vulkan port cuts alike: gpu/shaders/block_common.glsl).
-uint64_t BlockCost(uint32_t length, int bits) { return 150 + (bits ? 150 : 0) + uint64_t{length} * bits * 2; }
+// The bits the variable-rate tree and cut weigh a block by, in tenths of a bit: a weight of 1..4
+// bits what block stream version 4 spends on it (0.6 / 1.0 / 1.7 / 2.5 bits), the header (length,
+// width, endpoint A) 100 bits and endpoint B 100, where the stream spends ~23 and ~20: a block
+// boundary also costs the weights after it their context and the threshold search more units to
+// correct. The stream's own costs made lion, guanyin and autzen 3-10 % larger at equal PSNR-Y,
+// headers of 30 and 30 bits with the weights at 0.7 of these 1-4 % (docs/benchmarks.md). A bit is
+// worth half the threshold, half the weight choice's price (weight_choice.h): a block costs
+// kTenthsPerSse x its error + scaled x its tenths of a bit (lambdas of 1 and 2 x this: 1 % larger).
+constexpr uint64_t kHeaderTenths = 1000, kSecondEndTenths = 1000;
+constexpr std::array<uint64_t, kMaxWeightBits + 1> kWeightTenths = {0, 6, 10, 17, 25};
+constexpr uint64_t kTenthsPerSse = 20;
+uint64_t RateTenths(uint32_t length, int bits) {
+  return kHeaderTenths + (bits ? kSecondEndTenths : 0) + uint64_t{length} * kWeightTenths[bits];
+}
 
 // The first level of the tree above the leaves that merges blocks; the levels below it keep the
-// leaves (refitted, never kept by the cut: more bits for the same length cost more). The cut kept
-// 1-bit blocks for 0.1 % (lion) to 5 % (guanyin) of the colors at 38 dB, and without 1-bit merges the
-// sizes at equal PSNR-Y were the same or smaller, for 1/6 fewer fitted colors. As gpu/pointdag/gpu/color_blocks.cc.
+// leaves (refitted). Merging at 1 bit as well measured the same or larger at equal PSNR-Y (lion,
+// guanyin, autzen), for 1/6 more fitted colors. As gpu/pointdag/gpu/color_blocks.cc.
 constexpr int kFirstMergedBits = 2;
 
-// Paper IIB: the block tree of one macro block (levels 0..4 bits) and its cheapest cut.
+// Paper IIB's block tree of one macro block (levels 0..4 bits) and its cut, by rate and distortion
+// together: a merge is kept where it adds less error than the header it saves is worth, and the cut
+// keeps a block where its error plus its bits, both in BlockError units, cost less than its
+// children's (ties: the children, fewer bits each). Lion, guanyin, autzen 3-12 % smaller at equal
+// PSNR-Y than a tree whose every block met the threshold, cut by bits alone (docs/benchmarks.md).
 std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32_t count, Threshold threshold) {
   std::vector<std::vector<Candidate>> levels;
-  levels.push_back(MergePasses(fitter, Singletons(count), 0, threshold));
-  for (int bits = 1; bits <= kMaxWeightBits; ++bits) {
-    std::vector<Candidate> start;  // the previous level's blocks, to be refitted with more bits
-    start.reserve(levels.back().size());
-    for (const Candidate& c : levels.back()) start.push_back({c.start, c.length, std::nullopt});
-    levels.push_back(bits < kFirstMergedBits ? std::move(start) : MergePasses(fitter, std::move(start), bits, threshold));
+  for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
+    std::vector<Candidate> start;  // the leaves, or the previous level's blocks to be refitted with more bits
+    if (bits == 0) {
+      start = Singletons(count);
+    } else {
+      start.reserve(levels.back().size());
+      for (const Candidate& c : levels.back()) start.push_back({c.start, c.length, std::nullopt});
+    }
+    if (bits > 0 && bits < kFirstMergedBits) {
+      levels.push_back(std::move(start));
+      continue;
+    }
+    const uint64_t saved = threshold.scaled * (kHeaderTenths + (bits ? kSecondEndTenths : 0)) / kTenthsPerSse;
+    levels.push_back(MergePasses(fitter, std::move(start), bits, [&](Candidate& a, Candidate& b) {
+      return FitOf(fitter, a, bits).sse + FitOf(fitter, b, bits).sse + saved;
+    }));
   }
   // Cut bottom-up: best[level][k] is the cheapest way to code block k of that level.
   struct Best {
@@ -112,15 +133,18 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32
     bool keep_self;
   };
   std::vector<std::vector<Best>> best(levels.size());
-  for (const Candidate& c : levels[0]) best[0].push_back({BlockCost(c.length, 0), true});
-  for (size_t level = 1; level < levels.size(); ++level) {
+  for (size_t level = 0; level < levels.size(); ++level) {
     size_t child = 0;
-    for (const Candidate& c : levels[level]) {
-      uint64_t children = 0;
-      for (; child < levels[level - 1].size() && levels[level - 1][child].start < c.start + c.length; ++child) {
-        children += best[level - 1][child].cost;
+    for (Candidate& c : levels[level]) {
+      uint64_t children = UINT64_MAX;
+      if (level > 0) {
+        children = 0;
+        for (; child < levels[level - 1].size() && levels[level - 1][child].start < c.start + c.length; ++child) {
+          children += best[level - 1][child].cost;
+        }
       }
-      const uint64_t own = BlockCost(c.length, static_cast<int>(level));
+      const int bits = static_cast<int>(level);
+      const uint64_t own = kTenthsPerSse * FitOf(fitter, c, bits).sse + threshold.scaled * RateTenths(c.length, bits);
       best[level].push_back(own < children ? Best{own, true} : Best{children, false});
     }
   }
@@ -132,7 +156,7 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32
     for (; it != blocks.end() && it->start < stop; ++it) {
       const size_t k = static_cast<size_t>(it - blocks.begin());
       if (best[level][k].keep_self) {
-        out.push_back({it->start, it->length, static_cast<uint8_t>(level), EndsOf(fitter, *it, static_cast<int>(level))});
+        out.push_back({it->start, it->length, static_cast<uint8_t>(level), it->fit->ends});
       } else {
         self(self, level - 1, it->start, it->start + it->length);
       }
@@ -154,8 +178,9 @@ std::vector<ColorBlock> EncodeBlocksOnCpu(std::span<const Rgb8> colors, BlockLay
     if (layout == BlockLayout::kVariableRate) {
       per_macro[m] = VariableRateMacroBlock(fitter, count, threshold);
     } else {
-      for (const Candidate& c : MergePasses(fitter, Singletons(count), kFixedRateBits, threshold)) {
-        per_macro[m].push_back({c.start, c.length, kFixedRateBits, EndsOf(fitter, c, kFixedRateBits)});
+      const auto limit = [&](const Candidate& a, const Candidate& b) { return threshold.MaxSse(a.length + b.length); };
+      for (Candidate& c : MergePasses(fitter, Singletons(count), kFixedRateBits, limit)) {
+        per_macro[m].push_back({c.start, c.length, kFixedRateBits, FitOf(fitter, c, kFixedRateBits).ends});
       }
     }
     for (ColorBlock& b : per_macro[m]) b.start += begin;

@@ -8,12 +8,13 @@
 // Fixed rate (IIA): every color gets a 3-bit weight. Encoding starts from one block per color; each
 // pass walks the blocks and merges each with its right neighbour where the merged block stays within
 // the threshold; a block merges at most once per pass; passes repeat until one merges nothing.
-// Variable rate (IIB): the same merging with 0 bits per weight gives the tree's leaves; merging
+// Variable rate (IIB): the same merge passes with 0 bits per weight give the tree's leaves; merging
 // those with 2 bits gives their parents, and so on up to 4 bits (the 1-bit level keeps the leaves
-// unmerged: block_codec.cc, kFirstMergedBits). The tree is then cut bottom-up,
-// keeping a node only where it costs fewer bits than its children. Every node of the tree meets the
-// threshold, so every cut does. All of it is integer arithmetic, so that the Vulkan port
-// (gpu/shaders/block_*.comp) returns the same blocks.
+// unmerged: block_codec.cc, kFirstMergedBits). Here the threshold prices bits instead of bounding
+// errors: a merge is kept where the error it adds is worth less than the header it saves, and the
+// tree is cut bottom-up, keeping a node only where its error plus its bits cost less than its
+// children's. All of it is integer arithmetic, so that the Vulkan port (gpu/shaders/block_*.comp)
+// returns the same blocks.
 //
 // Decoding one color touches one macro-block entry, a binary search over that macro block's block
 // starts, and one weight: no other block is read.
@@ -47,9 +48,10 @@ struct ColorBlock {
 
 enum class BlockLayout : uint8_t { kFixedRate = 1, kVariableRate = 2 };
 
-// `max_mse` bounds each block's mean luma-weighted error per channel (BlockError / 3, block_fit.h;
-// the RGB squared error for gray differences; 0 keeps every color exact where the
-// model allows). Blocks come out sorted, covering every color once, never across macro blocks.
+// `max_mse` bounds each fixed-rate block's mean luma-weighted error per channel (BlockError / 3,
+// block_fit.h; the RGB squared error for gray differences), and prices a variable-rate block's
+// bits (1536 max_mse BlockError units a bit, block_codec.cc); 0 keeps every color exact where the
+// model allows. Blocks come out sorted, covering every color once, never across macro blocks.
 // Runs on Vulkan where ColorBlocksDevice() says so, with the same result; an error only from there
 // (POINTDAG_DEVICE unknown, or `vulkan` without a device, or the device failing).
 StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, BlockLayout layout, double max_mse);

@@ -110,12 +110,14 @@ struct Prediction {
   double alpha = 1;  // the error grows as threshold^alpha
 };
 
-// The threshold whose sample PSNR-Y is target + kAim: a secant on log(threshold) from 1.5 times
-// the MSE the target allows (where lion, guanyin and autzen meet it).
+// The threshold whose sample PSNR-Y is target + kAim: a secant on log(threshold) from a multiple of
+// the MSE the target allows where lion, guanyin and autzen meet it: 1.5 for the fixed rate, whose
+// threshold bounds each block; 2.5 for the variable rate, whose cut prices bits with it
+// (block_codec.cc; 1.5-3.1 at 34 and 42 dB).
 StatusOr<Prediction> Predict(std::span<const Rgb8> colors, BlockLayout layout, const Judge& judge, double target,
                              double& encoded) {
   const double allowed = 255.0 * 255.0 / std::pow(10.0, target / 10.0);
-  Prediction out{std::log(1.5 * allowed)};
+  Prediction out{std::log((layout == BlockLayout::kVariableRate ? 2.5 : 1.5) * allowed)};
   const uint32_t run = std::min(kLongestRun, std::bit_floor(static_cast<uint32_t>(colors.size() / (8 * kSampleRuns))));
   if (run < kShortestRun) return out;
   std::vector<Unit> sample(kSampleRuns);

@@ -8,7 +8,7 @@
 // are encoded again at a scaled threshold (largest error first); a raised unit is kept only where
 // the total still meets the target. The target is met by the blocks' exact reconstruction (the
 // decoder's), never by the prediction: when corrections do not reach it, units fall back to
-// threshold 0 (exact). Arrays too small to sample start from 1.5x the MSE the target allows.
+// threshold 0 (exact). Arrays too small to sample start from 1.5x (fixed rate) or 2.5x (variable rate) the MSE the target allows.
 #pragma once
 
 #include <cstdint>

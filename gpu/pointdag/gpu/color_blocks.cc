@@ -102,7 +102,7 @@ StatusOr<std::vector<DeviceColorBlock>> EncodeColorBlocks(VulkanContext& vulkan,
   ASSIGN_OR_RETURN(Buffer prefix, vulkan.CreateBuffer(macros * (kMacroBlockColors + 1) * 9 * 4));
   ASSIGN_OR_RETURN(Buffer levels, vulkan.CreateBuffer(slots * kLevels * 16));
   ASSIGN_OR_RETURN(Buffer pairs, vulkan.CreateBuffer(slots * 16));
-  ASSIGN_OR_RETURN(Buffer costs, vulkan.CreateBuffer(slots * kLevels * 4));
+  ASSIGN_OR_RETURN(Buffer costs, vulkan.CreateBuffer(slots * kLevels * 8));
   ASSIGN_OR_RETURN(Buffer counts, vulkan.CreateBuffer(macros * kLevels * 4));
   ASSIGN_OR_RETURN(Buffer blocks, vulkan.CreateBuffer((slots + macros) * 16));
   ASSIGN_OR_RETURN(Buffer merges, vulkan.CreateBuffer(kPassesPerSubmit * 4));
