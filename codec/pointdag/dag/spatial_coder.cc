@@ -26,7 +26,10 @@ constexpr int kClasses = kMaxDepth + 1;
 constexpr int kMaskContexts = 4 * 8 * 27 * 4;
 
 struct SpatialModels {
-  std::array<std::array<YoungBitModel, kMaskContexts>, kClasses> mask;
+  explicit SpatialModels(int depth) : mask(static_cast<size_t>(depth) + 1) {}
+  // By height, only those a walk of `depth` visits (1..depth): all 21 were 456 kB to initialise
+  // per tile, more than a tile's geometry decode touches.
+  std::vector<std::array<YoungBitModel, kMaskContexts>> mask;
   std::array<BitModel, kClasses> flag;
   std::array<GammaModel, kClasses> ref;
 };
@@ -129,7 +132,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
   const int levels = depth - 2;
   const int slot_level = SlotLevel(levels, version);
   const bool edges = version >= 2;
-  auto models = std::make_unique<SpatialModels>();
+  auto models = std::make_unique<SpatialModels>(depth);
   Mixers mix;
   if (version >= 5) {
     mix.v5 = std::make_unique<MaskMixer5>();
