@@ -23,9 +23,17 @@ uint32_t PackedWeight(const uint64_t* words, uint64_t bit_offset, int bits) {
 
 // `n` colors of one block from its weights at `bit_offset`, kBits a constant so that Interpolate
 // divides by a constant (a multiply) and the weight reads need no variable masks.
+// A run longer than the block's 2^kBits colors looks them up, interpolated once each.
 template <int kBits>
 void DecodeRun(const Endpoints& ends, const uint64_t* words, uint64_t bit_offset, uint64_t n, Rgb8* out) {
-  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = Interpolate(ends, PackedWeight(words, bit_offset, kBits), kBits);
+  constexpr uint32_t kColors = 1u << kBits;
+  if (n <= kColors) {
+    for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = Interpolate(ends, PackedWeight(words, bit_offset, kBits), kBits);
+    return;
+  }
+  std::array<Rgb8, kColors> palette;
+  for (uint32_t w = 0; w < kColors; ++w) palette[w] = Interpolate(ends, w, kBits);
+  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = palette[PackedWeight(words, bit_offset, kBits)];
 }
 
 }  // namespace
