@@ -17,14 +17,11 @@ namespace pointdag {
 struct BitModel {
   uint16_t fast = 32768, slow = 32768;
   uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }  // 12 bits, never 0
-  void Update(int bit) {
-    if (bit == 0) {
-      fast = static_cast<uint16_t>(fast + ((65536 - fast) >> 4));
-      slow = static_cast<uint16_t>(slow + ((65536 - slow) >> 7));
-    } else {
-      fast = static_cast<uint16_t>(fast - (fast >> 4));
-      slow = static_cast<uint16_t>(slow - (slow >> 7));
-    }
+  void Update(int bit) {  // both moves computed and one selected: no branch on the bit
+    const auto up = [](uint16_t p, int rate) { return static_cast<uint16_t>(p + ((65536 - p) >> rate)); };
+    const auto down = [](uint16_t p, int rate) { return static_cast<uint16_t>(p - (p >> rate)); };
+    fast = bit ? down(fast, 4) : up(fast, 4);
+    slow = bit ? down(slow, 7) : up(slow, 7);
   }
 };
 
