@@ -4,6 +4,7 @@
 #include <array>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "pointdag/color/block_stream.h"
@@ -23,9 +24,36 @@ uint32_t PackedWeight(const uint64_t* words, uint64_t bit_offset, int bits) {
 
 // `n` colors of one block from its weights at `bit_offset`, kBits a constant so that Interpolate
 // divides by a constant (a multiply) and the weight reads need no variable masks.
+// A run longer than the block's 2^kBits colors looks them up, interpolated once each.
 template <int kBits>
 void DecodeRun(const Endpoints& ends, const uint64_t* words, uint64_t bit_offset, uint64_t n, Rgb8* out) {
-  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = Interpolate(ends, PackedWeight(words, bit_offset, kBits), kBits);
+  constexpr uint32_t kColors = 1u << kBits;
+  if (n <= kColors) {
+    for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = Interpolate(ends, PackedWeight(words, bit_offset, kBits), kBits);
+    return;
+  }
+  std::array<Rgb8, kColors> palette;
+  for (uint32_t w = 0; w < kColors; ++w) palette[w] = Interpolate(ends, w, kBits);
+  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = palette[PackedWeight(words, bit_offset, kBits)];
+}
+
+// Weights with the previous weight as their only context (versions 1 and 2, and mipmapped
+// streams of any version: no Morton codes, no spatial contexts), kBits a constant so that each
+// bit tree unrolls. Writes them packed at `bit_offset` into `words` (sized by the caller).
+template <int kBits>
+void DecodePlainWeights(BinaryRangeDecoder& rc, std::span<BitTreeModel<kMaxWeightBits>> models, uint32_t length,
+                        uint64_t* words, uint64_t bit_offset) {
+  uint32_t prev = 16;
+  for (uint32_t i = 0; i < length; ++i, bit_offset += kBits) {
+    BitTreeModel<kMaxWeightBits>& m = models[prev];
+    uint32_t node = 1;
+#pragma GCC unroll 4
+    for (int b = 0; b < kBits; ++b) node = node << 1 | static_cast<uint32_t>(rc.Decode(m.node[node]));
+    const uint32_t w = node - (1u << kBits);
+    words[bit_offset >> 6] |= uint64_t{w} << (bit_offset & 63);
+    if ((bit_offset & 63) + kBits > 64) words[(bit_offset >> 6) + 1] |= uint64_t{w} >> (64 - (bit_offset & 63));
+    prev = w;
+  }
 }
 
 }  // namespace
@@ -111,7 +139,17 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     d.ends_.push_back(ends);
     uint32_t prev_w = 16;
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
-    for (uint32_t i = 0; bits && i < length; ++i) {
+    if (!mixed && !spatial && bits) {
+      const std::span<BitTreeModel<kMaxWeightBits>> plain(models->weight[bits]);
+      switch (bits) {
+        case 1: DecodePlainWeights<1>(rc, plain, length, d.weights_.data(), weight_bits); break;
+        case 2: DecodePlainWeights<2>(rc, plain, length, d.weights_.data(), weight_bits); break;
+        case 3: DecodePlainWeights<3>(rc, plain, length, d.weights_.data(), weight_bits); break;
+        default: DecodePlainWeights<4>(rc, plain, length, d.weights_.data(), weight_bits); break;
+      }
+      weight_bits += uint64_t{length} * static_cast<uint64_t>(bits);
+    }
+    for (uint32_t i = 0; (mixed || spatial) && bits && i < length; ++i) {
       uint32_t w;
       if (mixed) {
         w = mixer->Decode(rc, bits, {spatial->Position(next + i, ends, bits, true), prev_w});

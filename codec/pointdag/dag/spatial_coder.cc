@@ -26,7 +26,10 @@ constexpr int kClasses = kMaxDepth + 1;
 constexpr int kMaskContexts = 4 * 8 * 27 * 4;
 
 struct SpatialModels {
-  std::array<std::array<YoungBitModel, kMaskContexts>, kClasses> mask;
+  explicit SpatialModels(int depth) : mask(static_cast<size_t>(depth) + 1) {}
+  // By height, only those a walk of `depth` visits (1..depth): all 21 were 456 kB to initialise
+  // per tile, more than a tile's geometry decode touches.
+  std::vector<std::array<YoungBitModel, kMaskContexts>> mask;
   std::array<BitModel, kClasses> flag;
   std::array<GammaModel, kClasses> ref;
 };
@@ -78,14 +81,15 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
   unsigned exists = 0;
   uint32_t facing = 0;
   std::array<unsigned, 3> below{};  // the masks of the lower face neighbours (0: none)
+  // Unrolled and without branches (a missing neighbour reads the sentinel mask 0, whose facing
+  // bits are 0): which neighbours exist is a coin toss to the branch predictor.
+  const int32_t none = static_cast<int32_t>(lv.size());
+#pragma GCC unroll 3
   for (int axis = 0; axis < 3; ++axis) {
     const int32_t lo = lv.nbr[i][2 * axis];
-    if (lo >= 0) {
-      exists |= 1u << axis;
-      below[axis] = lv.mask[lo];
-      facing |= kFacing[axis][below[axis]];
-    }
-    if (lv.nbr[i][2 * axis + 1] >= 0) exists |= 8u << axis;
+    exists |= (lo >= 0 ? 1u : 0u) << axis | (lv.nbr[i][2 * axis + 1] >= 0 ? 8u : 0u) << axis;
+    below[axis] = lv.mask[lo >= 0 ? lo : none];
+    facing |= kFacing[axis][below[axis]];
   }
   const auto& sides = kSides[exists];
   const Around around = edges ? Surroundings<kVersion5>(lv, i) : Around{};
@@ -129,7 +133,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
   const int levels = depth - 2;
   const int slot_level = SlotLevel(levels, version);
   const bool edges = version >= 2;
-  auto models = std::make_unique<SpatialModels>();
+  auto models = std::make_unique<SpatialModels>(depth);
   Mixers mix;
   if (version >= 5) {
     mix.v5 = std::make_unique<MaskMixer5>();

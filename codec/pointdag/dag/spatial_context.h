@@ -247,11 +247,21 @@ inline Around Surroundings(const Level& lv, size_t i) {
 #pragma GCC unroll 8
   for (int c = 0; c < 8; ++c) {
     const int x = (c >> 2) & 1, y = (c >> 1) & 1, z = c & 1;
-    const int32_t c1 = step(xy[x][y], 4 + z), c2 = step(xz[x][z], 2 + y), c3 = step(yz[y][z], x);
-    const bool corner = (c1 & c2 & c3) >= 0;  // any of the three is >= 0
-    const int near = (xy[x][y] >= 0) + (xz[x][z] >= 0) + (yz[y][z] >= 0) + corner;
+    const int edges = (xy[x][y] >= 0) + (xz[x][z] >= 0) + (yz[y][z] >= 0);
+    bool corner;
+    if (kVersion5 || c == 0) {
+      const int32_t c1 = step(xy[x][y], 4 + z), c2 = step(xz[x][z], 2 + y), c3 = step(yz[y][z], x);
+      corner = (c1 & c2 & c3) >= 0;  // any of the three is >= 0
+      if (c == 0) lower_corner = c1 >= 0 ? c1 : c2 >= 0 ? c2 : c3;
+    } else {
+      // Without version 5's side bits the corner decides `outer` only when exactly one edge exists,
+      // and then only the step from that edge can reach it: one lookup instead of three (the
+      // same bit: with no edge the step reads the sentinel row, with two `near` is 2 already).
+      const int32_t via = xy[x][y] >= 0 ? step(xy[x][y], 4 + z) : xz[x][z] >= 0 ? step(xz[x][z], 2 + y) : step(yz[y][z], x);
+      corner = via >= 0;
+    }
+    const int near = edges + corner;
     out.outer = static_cast<uint8_t>(out.outer | (near >= 2 ? 1u << c : 0u));
-    if (c == 0) lower_corner = c1 >= 0 ? c1 : c2 >= 0 ? c2 : c3;
     if constexpr (kVersion5) {
       out.side[c] = static_cast<uint8_t>((f[x] >= 0) | (f[2 + y] >= 0) << 1 | (f[4 + z] >= 0) << 2 | (xy[x][y] >= 0) << 3 |
                                          (xz[x][z] >= 0) << 4 | (yz[y][z] >= 0) << 5 | corner << 6);

@@ -81,8 +81,10 @@ std::optional<uint64_t> Locate(const Svdag& dag, uint32_t x, uint32_t y, uint32_
   return index + static_cast<uint64_t>(__builtin_popcountll(brick & ((uint64_t{1} << bit) - 1)));
 }
 
-void VisitVoxels(const Svdag& dag, uint32_t ref, int level, uint64_t prefix,
-                 const std::function<void(uint64_t)>& visit) {
+// A template, not a std::function: MortonCodes' push per voxel inlines (an indirect call per voxel
+// was 4 % of a tile's decode).
+template <typename Visit>
+void VisitVoxels(const Svdag& dag, uint32_t ref, int level, uint64_t prefix, Visit& visit) {
   if (level == dag.depth - 2) {
     for (uint64_t brick = dag.leaves[ref]; brick; brick &= brick - 1) {
       visit(prefix << 6 | static_cast<uint64_t>(__builtin_ctzll(brick)));
@@ -134,7 +136,9 @@ void Svdag::ForEachVoxel(const std::function<void(uint64_t)>& visit) const {
 
 std::vector<uint64_t> Svdag::MortonCodes() const {
   std::vector<uint64_t> codes;
-  ForEachVoxel([&](uint64_t code) { codes.push_back(code); });
+  if (leaves.empty()) return codes;
+  auto push = [&](uint64_t code) { codes.push_back(code); };
+  VisitVoxels(*this, 0, 0, 0, push);
   return codes;
 }
 

@@ -17,14 +17,11 @@ namespace pointdag {
 struct BitModel {
   uint16_t fast = 32768, slow = 32768;
   uint32_t P0() const { return ((uint32_t{fast} + slow) >> 5) | 1u; }  // 12 bits, never 0
-  void Update(int bit) {
-    if (bit == 0) {
-      fast = static_cast<uint16_t>(fast + ((65536 - fast) >> 4));
-      slow = static_cast<uint16_t>(slow + ((65536 - slow) >> 7));
-    } else {
-      fast = static_cast<uint16_t>(fast - (fast >> 4));
-      slow = static_cast<uint16_t>(slow - (slow >> 7));
-    }
+  void Update(int bit) {  // both moves computed and one selected: no branch on the bit
+    const auto up = [](uint16_t p, int rate) { return static_cast<uint16_t>(p + ((65536 - p) >> rate)); };
+    const auto down = [](uint16_t p, int rate) { return static_cast<uint16_t>(p - (p >> rate)); };
+    fast = bit ? down(fast, 4) : up(fast, 4);
+    slow = bit ? down(slow, 7) : up(slow, 7);
   }
 };
 
@@ -160,18 +157,14 @@ class BinaryRangeDecoder {
   explicit BinaryRangeDecoder(std::span<const uint8_t> in) : in_(in) {
     for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
   }
+  // Branch-free: the bit is a coin toss to the branch predictor, selects are not.
   template <typename Model>
   int Decode(Model& m) {
     const uint32_t bound = (range_ >> 12) * m.P0();
-    int bit;
-    if (code_ < bound) {
-      range_ = bound;
-      bit = 0;
-    } else {
-      code_ -= bound;
-      range_ -= bound;
-      bit = 1;
-    }
+    const bool one = code_ >= bound;
+    code_ -= one ? bound : 0u;
+    range_ = one ? range_ - bound : bound;
+    const int bit = one ? 1 : 0;
     m.Update(bit);
     Normalize();
     return bit;
@@ -188,16 +181,17 @@ class BinaryRangeDecoder {
     return value;
   }
   // True once the decoder has wanted more bytes than the input had: the stream was truncated.
-  bool overrun() const { return overrun_ > 4; }
+  bool overrun() const { return read_ > in_.size() + 4; }
   // True when the decoder has read exactly its input, as it does on what Finish() wrote: a stream
   // that must fill its bytes can then refuse both truncation and trailing bytes.
-  bool consumed_exactly() const { return overrun_ == 0 && pos_ == in_.size(); }
+  bool consumed_exactly() const { return read_ == in_.size(); }
 
  private:
+  // Bytes past the input read as zero; `read_` counts them too (overrun).
   uint8_t Next() {
-    if (pos_ < in_.size()) return in_[pos_++];
-    ++overrun_;
-    return 0;
+    const uint8_t byte = read_ < in_.size() ? in_[read_] : 0;
+    ++read_;
+    return byte;
   }
   void Normalize() {
     while (range_ < (1u << 24)) {
@@ -207,8 +201,7 @@ class BinaryRangeDecoder {
   }
 
   std::span<const uint8_t> in_;
-  size_t pos_ = 0;
-  size_t overrun_ = 0;
+  size_t read_ = 0;  // bytes consumed, those past the input included
   uint32_t code_ = 0;
   uint32_t range_ = 0xFFFFFFFFu;
 };
