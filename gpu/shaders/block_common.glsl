@@ -33,7 +33,7 @@ layout(std430, binding = 2) buffer Levels { uvec4 cand[]; };
 // (y, z its endpoints, w the error's low word); during the cut, at a block's start: x = 1 + level,
 // y = its index at that level.
 layout(std430, binding = 3) buffer Pairs { uvec4 pair[]; };
-// Parallel to cand: a candidate's error (its fit's sse) while the tree is built; the cut replaces it
+// Parallel to cand: a candidate's error (its fit's sse; variable rate: WeighedError) while the tree is built; the cut replaces it
 // with the cheapest cost of coding it.
 layout(std430, binding = 4) buffer Costs { uint64_t cost[]; };
 layout(std430, binding = 5) buffer Counts { uint counts[]; };  // per macro and level
@@ -203,4 +203,31 @@ Fit FitBlock(uint m, uint begin, uint length, int bits, uint64_t give_up_above) 
   }
   if (sse < best.sse) best = Fit(refined_a, refined_b, sse);
   return best;
+}
+
+// block_codec.cc's WeighedError: what the variable-rate tree and cut weigh a fit by, its BlockError
+// plus kChromaTimes x its chroma part (kChromaWeights, of the block rebuilt with projected weights).
+// Two colors an iteration: with FitBlock's 3 x length + 2, under 65535 for a whole macro block.
+const ivec3 kC0 = ivec3(135, -94, -41), kC1 = ivec3(-94, 182, -88), kC2 = ivec3(-41, -88, 129);
+const uint64_t kChromaTimes = 4ul;
+
+int ChromaOf(ivec3 c, ivec3 a, ivec3 b, ivec3 q, int len2, int mx) {
+  const uint w = mx == 0 ? 0u : WeightOf(c, a, q, len2, mx);
+  const ivec3 e = c - (mx == 0 ? a : ivec3((uvec3(a) * (uint(mx) - w) + uvec3(b) * w + uint(mx) / 2u) / uint(mx)));
+  return e.x * (kC0.x * e.x + kC0.y * e.y + kC0.z * e.z) + e.y * (kC1.x * e.x + kC1.y * e.y + kC1.z * e.z) +
+         e.z * (kC2.x * e.x + kC2.y * e.y + kC2.z * e.z);
+}
+
+uint64_t WeighedError(uint m, uint begin, uint length, int bits, Fit f) {
+  const int mx = (1 << bits) - 1;
+  const ivec3 a = Unpack(f.a), b = Unpack(f.b), d = b - a, q = WeightedAxis(d);
+  const int len2 = d.x * q.x + d.y * q.y + d.z * q.z;
+  const uint first = m * kMacro + begin;
+  int64_t e = 0;
+  uint i = 0u;
+  for (; i + 1u < length; i += 2u) {
+    e += int64_t(ChromaOf(Unpack(colors[first + i]), a, b, q, len2, mx)) + int64_t(ChromaOf(Unpack(colors[first + i + 1u]), a, b, q, len2, mx));
+  }
+  if (i < length) e += int64_t(ChromaOf(Unpack(colors[first + i]), a, b, q, len2, mx));
+  return f.sse + kChromaTimes * uint64_t(max(e, int64_t(0)));
 }

@@ -18,7 +18,9 @@ void main() {
     const uint64_t limit = params.fixed_rate != 0u ? MaxSse(length)
                                                    : cost[CandAt(m, level, k)] + cost[CandAt(m, level, k + 1u)] + saved;
     const Fit f = FitBlock(m, here.x, length, int(params.bits), limit);
-    if (f.sse <= limit) result = uvec4(1u + uint(f.sse >> 32), f.a, f.b, uint(f.sse));
+    // Variable rate: the merged block's weighed error within the limit too (f.sse bounds it from below).
+    const uint64_t e = params.fixed_rate != 0u || f.sse > limit ? f.sse : WeighedError(m, here.x, length, int(params.bits), f);
+    if (e <= limit) result = uvec4(1u + uint(e >> 32), f.a, f.b, uint(e));
   }
   pair[m * kMacro + k] = result;
 }

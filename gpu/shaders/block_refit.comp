@@ -12,6 +12,6 @@ void main() {
   const uvec4 c = cand[CandAt(m, level - 1u, k)];
   const Fit f = FitBlock(m, c.x, Length(c), int(params.bits), 0xFFFFFFFFFFFFFFFFul);
   cand[CandAt(m, level, k)] = uvec4(c.x, Length(c), f.a, f.b);
-  cost[CandAt(m, level, k)] = f.sse;
+  cost[CandAt(m, level, k)] = WeighedError(m, c.x, Length(c), int(params.bits), f);
   if (k == 0u) counts[CountAt(m, level)] = n;
 }
