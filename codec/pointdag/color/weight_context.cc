@@ -68,6 +68,9 @@ constexpr auto kFarNeighbours = MakeNeighbourTable<79>(1, 2, [](int dx, int dy, 
   return d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
 });
 
+// A brick code's home slot in a table of 2^(64 - shift) (Fibonacci hashing).
+size_t BrickSlot(uint64_t code, int shift) { return static_cast<size_t>((code * 0x9E3779B97F4A7C15ull) >> shift); }
+
 }  // namespace
 
 WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()) {
@@ -75,6 +78,15 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
     const uint64_t code = morton[i] >> 6;
     if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
     bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
+  }
+  size_t capacity = 16;
+  while (capacity < 2 * bricks_.size()) capacity *= 2;
+  brick_slots_.assign(capacity, 0);
+  brick_shift_ = 64 - std::countr_zero(capacity);
+  for (size_t k = 0; k < bricks_.size(); ++k) {
+    size_t s = BrickSlot(bricks_[k].code, brick_shift_);
+    while (brick_slots_[s] != 0) s = (s + 1) & (capacity - 1);
+    brick_slots_[s] = static_cast<uint32_t>(k + 1);
   }
   for (Cursor& c : recent_) c.current = SIZE_MAX;
   if (!bricks_.empty()) {
@@ -98,29 +110,40 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   }
   cursor.current = k;
   const uint64_t code = bricks_[k].code;
-  for (int dx = -1; dx <= 1; ++dx) {
-    uint64_t cx = code;
-    const bool x_ok = Moved(code, 0, dx, cx);
-    for (int dy = -1; dy <= 1; ++dy) {
-      uint64_t cy = cx;
-      const bool y_ok = x_ok && Moved(cx, 1, dy, cy);
-      for (int dz = -1; dz <= 1; ++dz) {
-        Brick& near = cursor.near[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+  // Each axis' bits moved by -1, 0, +1 once: a neighbour's code is one of each axis' ORed together.
+  std::array<std::array<uint64_t, 3>, 3> moved{};
+  std::array<std::array<bool, 3>, 3> inside{};
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int d = -1; d <= 1; ++d) {
+      uint64_t out = 0;
+      inside[axis][d + 1] = Moved(code, axis, d, out);
+      moved[axis][d + 1] = out & kAxisBits[axis];
+    }
+  }
+  const uint64_t rest = code & ~(kAxisBits[0] | kAxisBits[1] | kAxisBits[2]);
+  for (int x = 0; x < 3; ++x) {
+    for (int y = 0; y < 3; ++y) {
+      for (int z = 0; z < 3; ++z) {
+        Brick& near = cursor.near[x * 9 + y * 3 + z];
         near = {0, 0, 0};
-        uint64_t c = cy;
-        if (!y_ok || !Moved(cy, 2, dz, c) || c > code) continue;  // outside, or after this brick
-        // Bricks are sorted by code: gallop back from this one (neighbours are mostly near), then bisect.
-        size_t hi = k + 1, step = 1;
-        while (step <= hi && bricks_[hi - step].code > c) hi -= step, step *= 2;
-        const auto first = bricks_.begin() + static_cast<ptrdiff_t>(step <= hi ? hi - step : 0);
-        const auto last = bricks_.begin() + static_cast<ptrdiff_t>(hi);
-        const auto it = std::lower_bound(first, last, c, [](const Brick& b, uint64_t v) { return b.code < v; });
-        if (it != last && it->code == c) near = *it;
+        if (!inside[0][x] || !inside[1][y] || !inside[2][z]) continue;  // outside the grid
+        const uint64_t c = moved[0][x] | moved[1][y] | moved[2][z] | rest;
+        if (c > code) continue;  // after this brick
+        if (const size_t found = FindBrick(c); found != SIZE_MAX) near = bricks_[found];
       }
     }
   }
   recent_[next_recent_] = cursor;
   next_recent_ = (next_recent_ + 1) % recent_.size();
+}
+
+size_t WeightContexts::FindBrick(uint64_t code) const {
+  const size_t last = brick_slots_.size() - 1;
+  for (size_t s = BrickSlot(code, brick_shift_); brick_slots_[s] != 0; s = (s + 1) & last) {
+    const size_t k = brick_slots_[s] - 1;
+    if (bricks_[k].code == code) return k;
+  }
+  return SIZE_MAX;
 }
 
 template <typename Table, typename F>

@@ -17,7 +17,9 @@
 // Neighbours are found through the voxels' 4x4x4 bricks (Morton code >> 6): per brick, its first
 // voxel's index and a 64-bit mask of its cells, so a neighbour's index is its brick's first index
 // plus the cells before it in the mask; the bricks around the current one are looked up once per
-// brick, and which cells a voxel's preceding neighbours are comes from a table per cell. Whole-file
+// brick (in a hash table of the brick codes: a search of the sorted bricks cost twice the
+// instructions and the cache misses), and which cells a voxel's preceding neighbours are comes from
+// a table per cell. Whole-file
 // decode of lion 1 cm at 38 dB (DecodePdag, one core): version 2 52 ms; version 3 with a hash table
 // of the codes (as the lossless colors use) 114 ms, with bricks 106, with the table and one
 // projection per weight (not per neighbour) 88. Version 4 walks the bricks twice (the endpoints' walk
@@ -96,9 +98,15 @@ class WeightContexts {
   template <typename Table, typename F>
   void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
 
+  // The index of the brick of `code`, else SIZE_MAX.
+  size_t FindBrick(uint64_t code) const;
+
   std::span<const uint64_t> morton_;
   std::vector<Rgb8> decoded_;
   std::vector<Brick> bricks_;
+  // Open addressing by brick code: index + 1 per slot, 0 empty (at most half full).
+  std::vector<uint32_t> brick_slots_;
+  int brick_shift_ = 64;
   Cursor weights_, ends_;
   // The bricks most recently entered by either cursor: the other enters the same ones soon after.
   std::array<Cursor, 8> recent_{};
