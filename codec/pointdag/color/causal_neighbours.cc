@@ -4,29 +4,7 @@
 
 namespace pointdag {
 
-CausalNeighbours::CausalNeighbours(std::span<const uint64_t> morton) : morton_(morton) {
-  for (size_t i = 0; i < morton.size(); ++i) {
-    const uint64_t code = morton[i] >> 6;
-    if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
-    bricks_.back().cells |= uint64_t{1} << (morton[i] & 63);
-  }
-  const size_t capacity = std::bit_ceil(std::max<size_t>(16, 2 * bricks_.size()));
-  slots_.assign(capacity, 0);
-  mask_ = capacity - 1;
-  for (size_t k = 0; k < bricks_.size(); ++k) {
-    uint64_t s = Hash(bricks_[k].code) & mask_;
-    while (slots_[s] != 0) s = (s + 1) & mask_;
-    slots_[s] = static_cast<uint32_t>(k + 1);
-  }
-}
-
-const CausalNeighbours::Brick* CausalNeighbours::Find(uint64_t code) const {
-  for (uint64_t s = Hash(code) & mask_; slots_[s] != 0; s = (s + 1) & mask_) {
-    const Brick& brick = bricks_[slots_[s] - 1];
-    if (brick.code == code) return &brick;
-  }
-  return nullptr;
-}
+CausalNeighbours::CausalNeighbours(std::span<const uint64_t> morton) : morton_(morton), bricks_(morton) {}
 
 void CausalNeighbours::Enter(uint64_t own) {
   constexpr int64_t kLastBrick = (int64_t{1} << (kMaxDepth - 2)) - 1;
@@ -44,11 +22,11 @@ void CausalNeighbours::Enter(uint64_t own) {
   for (int dx = 0; dx < 3; ++dx) {
     for (int dy = 0; dy < 3; ++dy) {
       for (int dz = 0; dz < 3; ++dz) {
-        const Brick*& near = near_[static_cast<size_t>(dx * 9 + dy * 3 + dz)];
+        const VoxelBrick*& near = near_[static_cast<size_t>(dx * 9 + dy * 3 + dz)];
         near = nullptr;
         if (!inside[0][dx] || !inside[1][dy] || !inside[2][dz]) continue;
         const uint64_t key = spread[0][dx] | spread[1][dy] | spread[2][dz];
-        if (key <= own) near = Find(key);  // a brick after `own` holds no voxel before its voxels
+        if (key <= own) near = bricks_.Find(key);  // a brick after `own` holds no voxel before its voxels
       }
     }
   }

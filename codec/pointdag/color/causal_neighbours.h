@@ -1,9 +1,8 @@
 // The voxels near a voxel that precede it in Morton order (decoded before it when colors are coded
 // one per voxel in that order), for the lossless colors' predictions (lossless_context.h).
 //
-// Found through the voxels' 4x4x4 bricks (Morton code >> 6), as weight_context.h does for the
-// block colors: per brick, its first voxel's index and a 64-bit mask of its cells, so a voxel's
-// index is its brick's first index plus the cells before it in the mask. A box of ±2 around a voxel
+// Found through the voxels' 4x4x4 bricks (voxel_bricks.h), as weight_context.h does for the block
+// colors. A box of ±2 around a voxel
 // touches at most 2x2x2 bricks (±4: 3x3x3), of which only those with a code not above the voxel's
 // own brick can hold voxels before it; each is one hash lookup, and the cells of the box in it one
 // mask. Lion 1 cm, a version-2 lossless file, `pointdag decode` (whole process, best of 5): 0.56 s
@@ -19,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "pointdag/color/voxel_bricks.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
@@ -34,24 +34,14 @@ class CausalNeighbours {
   void ForEach(size_t i, int inner, int outer, Visit&& visit);
 
  private:
-  struct Brick {
-    uint64_t code;   // Morton code >> 6
-    uint32_t first;  // index of its first voxel
-    uint64_t cells;  // bit (Morton code & 63) per voxel
-  };
-  const Brick* Find(uint64_t code) const;
   // Fills near_ for the brick of code `own` (Morton code >> 6).
   void Enter(uint64_t own);
-  static uint64_t Hash(uint64_t code) { return (code * 0x9E3779B97F4A7C15ull) >> 24; }
-
   std::span<const uint64_t> morton_;
-  std::vector<Brick> bricks_;
-  std::vector<uint32_t> slots_;  // open addressing: brick index + 1, 0 = empty
-  uint64_t mask_ = 0;
+  VoxelBricks bricks_;
   // The bricks around brick `entered_` at (dx + 1) * 9 + (dy + 1) * 3 + dz + 1, dx, dy, dz in
   // -1..1 (a box of ±4 voxels reaches no further): null where absent, outside or after it.
   uint64_t entered_ = UINT64_MAX;
-  std::array<const Brick*, 27> near_{};
+  std::array<const VoxelBrick*, 27> near_{};
 };
 
 namespace causal_neighbours_detail {
@@ -107,7 +97,7 @@ void CausalNeighbours::ForEach(size_t i, int inner, int outer, Visit&& visit) {
   for (int64_t bx = lo[0]; bx <= hi[0]; ++bx) {
     for (int64_t by = lo[1]; by <= hi[1]; ++by) {
       for (int64_t bz = lo[2]; bz <= hi[2]; ++bz) {
-        const Brick* brick = near_[static_cast<size_t>((bx - ox + 1) * 9 + (by - oy + 1) * 3 + (bz - oz + 1))];
+        const VoxelBrick* brick = near_[static_cast<size_t>((bx - ox + 1) * 9 + (by - oy + 1) * 3 + (bz - oz + 1))];
         if (brick == nullptr) continue;
         uint64_t cells = AxisCells(0, x, outer, bx) & AxisCells(1, y, outer, by) & AxisCells(2, z, outer, bz);
         cells &= ~(AxisCells(0, x, inner, bx) & AxisCells(1, y, inner, by) & AxisCells(2, z, inner, bz));

@@ -68,28 +68,11 @@ constexpr auto kFarNeighbours = MakeNeighbourTable<79>(1, 2, [](int dx, int dy, 
   return d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
 });
 
-// A brick code's home slot in a table of 2^(64 - shift) (Fibonacci hashing).
-size_t BrickSlot(uint64_t code, int shift) { return static_cast<size_t>((code * 0x9E3779B97F4A7C15ull) >> shift); }
-
 }  // namespace
 
-WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()) {
-  for (size_t i = 0; i < morton.size(); ++i) {
-    const uint64_t code = morton[i] >> 6;
-    if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
-    bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
-  }
-  size_t capacity = 16;
-  while (capacity < 2 * bricks_.size()) capacity *= 2;
-  brick_slots_.assign(capacity, 0);
-  brick_shift_ = 64 - std::countr_zero(capacity);
-  for (size_t k = 0; k < bricks_.size(); ++k) {
-    size_t s = BrickSlot(bricks_[k].code, brick_shift_);
-    while (brick_slots_[s] != 0) s = (s + 1) & (capacity - 1);
-    brick_slots_[s] = static_cast<uint32_t>(k + 1);
-  }
+WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()), bricks_(morton) {
   for (Cursor& c : recent_) c.current = SIZE_MAX;
-  if (!bricks_.empty()) {
+  if (!bricks_.all().empty()) {
     EnterBrick(weights_, 0);
     ends_ = weights_;
   }
@@ -97,7 +80,8 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
 
 void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
   size_t k = cursor.current;
-  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
+  const std::vector<VoxelBrick>& bricks = bricks_.all();
+  while (k + 1 < bricks.size() && bricks[k + 1].first <= i) ++k;
   if (k != cursor.current) EnterBrick(cursor, k);
 }
 
@@ -109,7 +93,7 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
     }
   }
   cursor.current = k;
-  const uint64_t code = bricks_[k].code;
+  const uint64_t code = bricks_.all()[k].code;
   // Each axis' bits moved by -1, 0, +1 once: a neighbour's code is one of each axis' ORed together.
   std::array<std::array<uint64_t, 3>, 3> moved{};
   std::array<std::array<bool, 3>, 3> inside{};
@@ -124,12 +108,12 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   for (int x = 0; x < 3; ++x) {
     for (int y = 0; y < 3; ++y) {
       for (int z = 0; z < 3; ++z) {
-        Brick& near = cursor.near[x * 9 + y * 3 + z];
+        VoxelBrick& near = cursor.near[x * 9 + y * 3 + z];
         near = {0, 0, 0};
         if (!inside[0][x] || !inside[1][y] || !inside[2][z]) continue;  // outside the grid
         const uint64_t c = moved[0][x] | moved[1][y] | moved[2][z] | rest;
         if (c > code) continue;  // after this brick
-        if (const size_t found = FindBrick(c); found != SIZE_MAX) near = bricks_[found];
+        if (const VoxelBrick* found = bricks_.Find(c)) near = *found;
       }
     }
   }
@@ -137,21 +121,12 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
-size_t WeightContexts::FindBrick(uint64_t code) const {
-  const size_t last = brick_slots_.size() - 1;
-  for (size_t s = BrickSlot(code, brick_shift_); brick_slots_[s] != 0; s = (s + 1) & last) {
-    const size_t k = brick_slots_[s] - 1;
-    if (bricks_[k].code == code) return k;
-  }
-  return SIZE_MAX;
-}
-
 template <typename Table, typename F>
 void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
   for (const Neighbour& n : table[morton_[i] & 63]) {
-    const Brick& near = cursor.near[n.slot];
-    if (n.weight == 0 || !(near.mask >> n.bit & 1)) continue;
-    f(near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1))), n.weight);
+    const VoxelBrick& near = cursor.near[n.slot];
+    if (n.weight == 0 || !(near.cells >> n.bit & 1)) continue;
+    f(near.first + static_cast<size_t>(std::popcount(near.cells & ((uint64_t{1} << n.bit) - 1))), n.weight);
   }
 }
 
