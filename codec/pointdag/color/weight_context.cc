@@ -59,14 +59,45 @@ constexpr auto MakeNeighbourTable(int inside, int reach, Weight weight) {
   }
   return table;
 }
+// The same neighbours grouped by the brick they lie in and their weight, one mask of cells per
+// group: a voxel visits the neighbours present (a group's mask ANDed with its brick's cells)
+// instead of testing each of them in turn (lion 1 cm, 38 dB encode: Position 205 M -> 179 M
+// instructions).
+struct NeighbourGroup {
+  uint64_t cells = 0;
+  uint8_t slot = 0, weight = 0;
+};
+// At most 2 bricks an axis (8 slots) times 3 weights.
+constexpr size_t kMaxGroups = 24;
+struct CellGroups {
+  std::array<NeighbourGroup, kMaxGroups> group{};
+  size_t count = 0;
+};
+template <size_t kCount>
+constexpr auto GroupNeighbours(const std::array<std::array<Neighbour, kCount>, 64>& table) {
+  std::array<CellGroups, 64> groups{};
+  for (size_t own = 0; own < 64; ++own) {
+    CellGroups& cell = groups[own];
+    for (const Neighbour& n : table[own]) {
+      if (n.weight == 0) continue;
+      size_t g = 0;
+      while (g < cell.count && (cell.group[g].slot != n.slot || cell.group[g].weight != n.weight)) ++g;
+      if (g == cell.count) cell.group[cell.count++] = {0, n.slot, n.weight};
+      cell.group[g].cells |= uint64_t{1} << n.bit;
+    }
+  }
+  return groups;
+}
+
 // The 19 of the 26 face, edge and corner neighbours that may precede: faces weigh 4, edges 2, corners 1.
-constexpr auto kNeighbours = MakeNeighbourTable<19>(0, 1, [](int dx, int dy, int dz) { return 8 >> ((dx != 0) + (dy != 0) + (dz != 0)); });
+constexpr auto kNeighbours = GroupNeighbours(
+    MakeNeighbourTable<19>(0, 1, [](int dx, int dy, int dz) { return 8 >> ((dx != 0) + (dy != 0) + (dz != 0)); }));
 // The 79 of the 98 cells two away (the 5x5x5 shell) that may precede, weighted by squared distance
 // d² 4 -> 3, 5 or 6 -> 2, 8, 9 or 12 -> 1 (the lossless coder's wide weights there).
-constexpr auto kFarNeighbours = MakeNeighbourTable<79>(1, 2, [](int dx, int dy, int dz) {
+constexpr auto kFarNeighbours = GroupNeighbours(MakeNeighbourTable<79>(1, 2, [](int dx, int dy, int dz) {
   const int d2 = dx * dx + dy * dy + dz * dz;
   return d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
-});
+}));
 
 }  // namespace
 
@@ -123,10 +154,14 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
 
 template <typename Table, typename F>
 void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
-  for (const Neighbour& n : table[morton_[i] & 63]) {
-    const VoxelBrick& near = cursor.near[n.slot];
-    if (n.weight == 0 || !(near.cells >> n.bit & 1)) continue;
-    f(near.first + static_cast<size_t>(std::popcount(near.cells & ((uint64_t{1} << n.bit) - 1))), n.weight);
+  const auto& cell = table[morton_[i] & 63];
+  for (size_t g = 0; g < cell.count; ++g) {
+    const NeighbourGroup& group = cell.group[g];
+    const VoxelBrick& near = cursor.near[group.slot];
+    for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
+      const uint64_t before = (uint64_t{1} << std::countr_zero(present)) - 1;
+      f(near.first + static_cast<size_t>(std::popcount(near.cells & before)), group.weight);
+    }
   }
 }
 

@@ -85,8 +85,8 @@ class WeightContexts {
   };
   void Seek(Cursor& cursor, uint64_t i);
   void EnterBrick(Cursor& cursor, size_t k);
-  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbours
-  // by its bit in the brick) that precedes it.
+  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbour
+  // groups by its bit in the brick) that precedes it.
   template <typename Table, typename F>
   void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
 
