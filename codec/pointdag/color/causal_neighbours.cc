@@ -1,6 +1,6 @@
 #include "pointdag/color/causal_neighbours.h"
 
-#include <algorithm>
+#include <array>
 
 namespace pointdag {
 

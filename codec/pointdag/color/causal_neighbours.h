@@ -2,13 +2,13 @@
 // one per voxel in that order), for the lossless colors' predictions (lossless_context.h).
 //
 // Found through the voxels' 4x4x4 bricks (voxel_bricks.h), as weight_context.h does for the block
-// colors. A box of ±2 around a voxel
-// touches at most 2x2x2 bricks (±4: 3x3x3), of which only those with a code not above the voxel's
-// own brick can hold voxels before it; each is one hash lookup, and the cells of the box in it one
-// mask. Lion 1 cm, a version-2 lossless file, `pointdag decode` (whole process, best of 5): 0.56 s
-// wall looking up each of the 62 candidate cells a voxel by code in a hash table, 0.21 s with bricks;
-// the same colors. The 3x3x3 bricks around a voxel's own are looked up once per brick, not per voxel
-// (lion 1 cm, `encode --lossless`: 3412 M -> 3313 M instructions).
+// colors. A box of ±2 around a voxel touches at most 2x2x2 bricks (±4: 3x3x3), of which only those
+// with a code not above the voxel's own brick can hold voxels before it; each is one hash lookup,
+// and the cells of the box in it one mask. Lion 1 cm, a version-2 lossless file, `pointdag decode`
+// (whole process, best of 5): 0.56 s wall looking up each of the 62 candidate cells a voxel by code
+// in a hash table, 0.21 s with bricks; the same colors. The 3x3x3 bricks around a voxel's own are
+// looked up once per brick, not per voxel (lion 1 cm, `encode --lossless`: 3412 M -> 3313 M
+// instructions).
 #pragma once
 
 #include <algorithm>
@@ -36,6 +36,7 @@ class CausalNeighbours {
  private:
   // Fills near_ for the brick of code `own` (Morton code >> 6).
   void Enter(uint64_t own);
+
   std::span<const uint64_t> morton_;
   VoxelBricks bricks_;
   // The bricks around brick `entered_` at (dx + 1) * 9 + (dy + 1) * 3 + dz + 1, dx, dy, dz in
