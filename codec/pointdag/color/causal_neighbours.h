@@ -105,7 +105,7 @@ void CausalNeighbours::ForEach(size_t i, int inner, int outer, Visit&& visit) {
         if (brick->code == own) cells &= (uint64_t{1} << (code & 63)) - 1;
         for (uint64_t m = cells & brick->cells; m != 0; m &= m - 1) {
           const int cell = std::countr_zero(m);
-          const uint32_t j = brick->first + static_cast<uint32_t>(std::popcount(brick->cells & ((uint64_t{1} << cell) - 1)));
+          const uint32_t j = brick->IndexOf(cell);
           const int at = kCellAt[cell];
           const int64_t dx = 4 * bx + (at >> 4) - v[0], dy = 4 * by + (at >> 2 & 3) - v[1], dz = 4 * bz + (at & 3) - v[2];
           visit(size_t{j}, static_cast<int>(dx * dx + dy * dy + dz * dz));

@@ -5,6 +5,7 @@
 // bisection over the sorted bricks cost the weight contexts twice the instructions).
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -15,6 +16,21 @@ struct VoxelBrick {
   uint64_t code;   // Morton code >> 6
   uint32_t first;  // index of its first voxel
   uint64_t cells;  // bit (Morton code & 63) per voxel
+
+  // The index of the voxel in `cell` (0..63, one of `cells`).
+  uint32_t IndexOf(int cell) const { return first + CountBits(cells & ((uint64_t{1} << cell) - 1)); }
+
+  // std::popcount is a libgcc call on baseline x86-64 (no POPCNT): the same count inline.
+  static uint32_t CountBits(uint64_t v) {
+#if defined(__POPCNT__) || !defined(__x86_64__)
+    return static_cast<uint32_t>(std::popcount(v));
+#else
+    v -= (v >> 1) & 0x5555555555555555ull;
+    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
+    v = (v + (v >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return static_cast<uint32_t>((v * 0x0101010101010101ull) >> 56);
+#endif
+  }
 };
 
 class VoxelBricks {

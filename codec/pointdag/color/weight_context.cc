@@ -159,8 +159,7 @@ void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, 
     const NeighbourGroup& group = cell.group[g];
     const VoxelBrick& near = cursor.near[group.slot];
     for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
-      const uint64_t before = (uint64_t{1} << std::countr_zero(present)) - 1;
-      f(near.first + static_cast<size_t>(std::popcount(near.cells & before)), group.weight);
+      f(size_t{near.IndexOf(std::countr_zero(present))}, group.weight);
     }
   }
 }
