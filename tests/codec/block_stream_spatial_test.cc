@@ -5,11 +5,13 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <set>
 
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/block_stream.h"
 #include "pointdag/color/block_target.h"
 #include "pointdag/color/color_codec.h"
+#include "pointdag/color/weight_context.h"
 #include "pointdag/voxelize/morton.h"
 #include "test_util.h"
 
@@ -89,6 +91,66 @@ TEST(BlockStreamSpatial, TheWriterRebuildsWhatTheDecoderDecodes) {
       }
     }
   }
+}
+
+// The bricks find what a search of every earlier voxel finds: Position's neighbours (the 26 around,
+// else the cells two away) and Surroundings' (the 26 around a block's first voxels, before it), on a
+// sparse cloud that touches the grid's lowest cells.
+TEST(BlockStreamSpatial, WeightContextsAreEveryEarlierNeighbour) {
+  std::mt19937 rng(5);
+  const auto coordinate = [&rng] { return static_cast<uint32_t>(rng() % 16); };
+  std::set<uint64_t> cloud;  // 22 % of the cells: some voxels have only the cells two away before them
+  while (cloud.size() < 900) cloud.insert(MortonEncode(coordinate(), coordinate(), coordinate()));
+  const std::vector<uint64_t> morton(cloud.begin(), cloud.end());
+  std::vector<Rgb8> decoded(morton.size());
+  for (Rgb8& c : decoded) c = {static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng())};
+  // Weighted sums of the voxels before `limit` at Chebyshev distance `ring` (1 or 2) from voxel i.
+  const auto naive = [&](size_t i, size_t limit, int ring) {
+    std::array<int64_t, 4> sum{};  // r, g, b, weight
+    const auto [x, y, z] = MortonDecode(morton[i]);
+    for (size_t j = 0; j < limit; ++j) {
+      const auto [a, b, c] = MortonDecode(morton[j]);
+      const int dx = static_cast<int>(a) - static_cast<int>(x), dy = static_cast<int>(b) - static_cast<int>(y),
+                dz = static_cast<int>(c) - static_cast<int>(z);
+      if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
+      const int d2 = dx * dx + dy * dy + dz * dz;
+      const int w = ring == 1 ? 8 >> ((dx != 0) + (dy != 0) + (dz != 0)) : d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
+      sum[0] += w * decoded[j].r, sum[1] += w * decoded[j].g, sum[2] += w * decoded[j].b, sum[3] += w;
+    }
+    return sum;
+  };
+  const Endpoints ends{{10, 20, 30}, {240, 200, 90}};
+  const int bits = 3;
+  WeightContexts contexts(morton);
+  size_t far_found = 0;
+  for (size_t i = 0; i < morton.size(); ++i) {
+    if (i % 7 == 0) {  // blocks of 7 voxels tile the colors
+      const uint32_t length = static_cast<uint32_t>(std::min<size_t>(7, morton.size() - i));
+      std::array<int64_t, 4> expected{};
+      for (size_t k = i; k < i + length; ++k) {
+        const auto near = naive(k, i, 1);
+        for (int c = 0; c < 4; ++c) expected[c] += near[c];
+      }
+      const BlockSurroundings s = contexts.Surroundings(i, length);
+      ASSERT_EQ((std::array<int64_t, 4>{s.r, s.g, s.b, s.weight}), expected) << "block at " << i;
+    }
+    auto sum = naive(i, i, 1);
+    const bool far = sum[3] == 0;
+    if (far) sum = naive(i, i, 2);
+    const NeighbourPosition p = contexts.Position(i, ends, bits, true);
+    ASSERT_EQ(p.found, sum[3] > 0) << "voxel " << i;
+    ASSERT_EQ(p.far, far && p.found) << "voxel " << i;
+    far_found += p.far ? 1 : 0;
+    if (p.found) {  // the projection as weight_context.h documents it, from the naive sums
+      const int64_t m = (1 << bits) - 1, sr = 230, sg = 180, sb = 60, len2 = sr * sr + sg * sg + sb * sb;
+      const int64_t dot = (sum[0] - sum[3] * 10) * sr + (sum[1] - sum[3] * 20) * sg + (sum[2] - sum[3] * 30) * sb;
+      const int64_t unit = 2 * sum[3] * len2;
+      EXPECT_EQ(p.step, dot <= 0 ? 0 : std::min(m, (2 * dot * m + sum[3] * len2) / unit)) << "voxel " << i;
+      EXPECT_EQ(p.half_step, dot <= 0 ? 0 : std::min(2 * m, (4 * dot * m + sum[3] * len2) / unit)) << "voxel " << i;
+    }
+    contexts.Record(i, decoded[i]);
+  }
+  EXPECT_GT(far_found, 10u);
 }
 
 TEST(BlockStreamSpatial, IsRefusedWithoutTheVoxelsMortonCodes) {

@@ -71,7 +71,7 @@ TEST(LosslessColors, CausalNeighboursAreEveryEarlierVoxelInTheShell) {
   std::set<uint64_t> cloud(clustered.begin(), clustered.end());
   while (cloud.size() < 3000) cloud.insert(MortonEncode(static_cast<uint32_t>(rng() % 12), static_cast<uint32_t>(rng() % 12), static_cast<uint32_t>(rng() % 12)));
   const std::vector<uint64_t> morton(cloud.begin(), cloud.end());
-  const CausalNeighbours neighbours(morton);
+  CausalNeighbours neighbours(morton);
   for (const auto& [inner, outer] : {std::pair{0, 2}, std::pair{2, 4}, std::pair{0, 4}}) {
     for (size_t i = 0; i < morton.size(); ++i) {
       std::set<std::pair<size_t, int>> found, expected;

@@ -1,14 +1,14 @@
 // The voxels near a voxel that precede it in Morton order (decoded before it when colors are coded
 // one per voxel in that order), for the lossless colors' predictions (lossless_context.h).
 //
-// Found through the voxels' 4x4x4 bricks (Morton code >> 6), as weight_context.h does for the
-// block colors: per brick, its first voxel's index and a 64-bit mask of its cells, so a voxel's
-// index is its brick's first index plus the cells before it in the mask. A box of ±2 around a voxel
-// touches at most 2x2x2 bricks (±4: 3x3x3), of which only those with a code not above the voxel's
-// own brick can hold voxels before it; each is one hash lookup, and the cells of the box in it one
-// mask. Lion 1 cm, a version-2 lossless file, `pointdag decode` (whole process, best of 5): 0.56 s
-// wall looking up each of the 62 candidate cells a voxel by code in a hash table, 0.21 s with bricks;
-// the same colors.
+// Found through the voxels' 4x4x4 bricks (voxel_bricks.h), as weight_context.h does for the block
+// colors. A box of ±2 around a voxel touches at most 2x2x2 bricks (±4: 3x3x3), of which only those
+// with a code not above the voxel's own brick can hold voxels before it; each is one hash lookup,
+// and the cells of the box in it one mask. Lion 1 cm, a version-2 lossless file, `pointdag decode`
+// (whole process, best of 5): 0.56 s wall looking up each of the 62 candidate cells a voxel by code
+// in a hash table, 0.21 s with bricks; the same colors. The 3x3x3 bricks around a voxel's own are
+// looked up once per brick, not per voxel (lion 1 cm, `encode --lossless`: 3412 M -> 3313 M
+// instructions).
 #pragma once
 
 #include <algorithm>
@@ -18,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "pointdag/color/voxel_bricks.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag {
@@ -30,21 +31,18 @@ class CausalNeighbours {
   // Calls visit(j, d2) for every voxel j < i whose largest axis distance from voxel i is above
   // `inner` and at most `outer` (0 <= inner < outer <= 4), d2 its squared distance.
   template <class Visit>
-  void ForEach(size_t i, int inner, int outer, Visit&& visit) const;
+  void ForEach(size_t i, int inner, int outer, Visit&& visit);
 
  private:
-  struct Brick {
-    uint64_t code;   // Morton code >> 6
-    uint32_t first;  // index of its first voxel
-    uint64_t cells;  // bit (Morton code & 63) per voxel
-  };
-  const Brick* Find(uint64_t code) const;
-  static uint64_t Hash(uint64_t code) { return (code * 0x9E3779B97F4A7C15ull) >> 24; }
+  // Fills near_ for the brick of code `own` (Morton code >> 6).
+  void Enter(uint64_t own);
 
   std::span<const uint64_t> morton_;
-  std::vector<Brick> bricks_;
-  std::vector<uint32_t> slots_;  // open addressing: brick index + 1, 0 = empty
-  uint64_t mask_ = 0;
+  VoxelBricks bricks_;
+  // The bricks around brick `entered_` at (dx + 1) * 9 + (dy + 1) * 3 + dz + 1, dx, dy, dz in
+  // -1..1 (a box of ±4 voxels reaches no further): null where absent, outside or after it.
+  uint64_t entered_ = UINT64_MAX;
+  std::array<const VoxelBrick*, 27> near_{};
 };
 
 namespace causal_neighbours_detail {
@@ -84,9 +82,10 @@ inline uint64_t AxisCells(int axis, int64_t v, int r, int64_t b) {
 }  // namespace causal_neighbours_detail
 
 template <class Visit>
-void CausalNeighbours::ForEach(size_t i, int inner, int outer, Visit&& visit) const {
+void CausalNeighbours::ForEach(size_t i, int inner, int outer, Visit&& visit) {
   using namespace causal_neighbours_detail;
   const uint64_t code = morton_[i], own = code >> 6;
+  if (own != entered_) Enter(own);
   const auto [x, y, z] = MortonDecode(code);
   const int64_t v[3] = {x, y, z};
   constexpr int64_t kLastBrick = (int64_t{1} << (kMaxDepth - 2)) - 1;
@@ -95,19 +94,18 @@ void CausalNeighbours::ForEach(size_t i, int inner, int outer, Visit&& visit) co
     lo[a] = std::max<int64_t>(v[a] - outer, 0) >> 2;
     hi[a] = std::min<int64_t>((v[a] + outer) >> 2, kLastBrick);
   }
+  const int64_t ox = x >> 2, oy = y >> 2, oz = z >> 2;
   for (int64_t bx = lo[0]; bx <= hi[0]; ++bx) {
     for (int64_t by = lo[1]; by <= hi[1]; ++by) {
       for (int64_t bz = lo[2]; bz <= hi[2]; ++bz) {
-        const uint64_t key = MortonEncode(static_cast<uint32_t>(bx), static_cast<uint32_t>(by), static_cast<uint32_t>(bz));
-        if (key > own) continue;  // every voxel there comes after voxel i
-        const Brick* brick = Find(key);
+        const VoxelBrick* brick = near_[static_cast<size_t>((bx - ox + 1) * 9 + (by - oy + 1) * 3 + (bz - oz + 1))];
         if (brick == nullptr) continue;
         uint64_t cells = AxisCells(0, x, outer, bx) & AxisCells(1, y, outer, by) & AxisCells(2, z, outer, bz);
         cells &= ~(AxisCells(0, x, inner, bx) & AxisCells(1, y, inner, by) & AxisCells(2, z, inner, bz));
-        if (key == own) cells &= (uint64_t{1} << (code & 63)) - 1;
+        if (brick->code == own) cells &= (uint64_t{1} << (code & 63)) - 1;
         for (uint64_t m = cells & brick->cells; m != 0; m &= m - 1) {
           const int cell = std::countr_zero(m);
-          const uint32_t j = brick->first + static_cast<uint32_t>(std::popcount(brick->cells & ((uint64_t{1} << cell) - 1)));
+          const uint32_t j = brick->IndexOf(cell);
           const int at = kCellAt[cell];
           const int64_t dx = 4 * bx + (at >> 4) - v[0], dy = 4 * by + (at >> 2 & 3) - v[1], dz = 4 * bz + (at & 3) - v[2];
           visit(size_t{j}, static_cast<int>(dx * dx + dy * dy + dz * dz));

@@ -59,25 +59,51 @@ constexpr auto MakeNeighbourTable(int inside, int reach, Weight weight) {
   }
   return table;
 }
+// The same neighbours grouped by the brick they lie in and their weight, one mask of cells per
+// group: a voxel visits the neighbours present (a group's mask ANDed with its brick's cells)
+// instead of testing each of them in turn (lion 1 cm, 38 dB encode: Position 205 M -> 179 M
+// instructions).
+struct NeighbourGroup {
+  uint64_t cells = 0;
+  uint8_t slot = 0, weight = 0;
+};
+// At most 2 bricks an axis (8 slots) times 3 weights.
+constexpr size_t kMaxGroups = 24;
+struct CellGroups {
+  std::array<NeighbourGroup, kMaxGroups> group{};
+  size_t count = 0;
+};
+template <size_t kCount>
+constexpr auto GroupNeighbours(const std::array<std::array<Neighbour, kCount>, 64>& table) {
+  std::array<CellGroups, 64> groups{};
+  for (size_t own = 0; own < 64; ++own) {
+    CellGroups& cell = groups[own];
+    for (const Neighbour& n : table[own]) {
+      if (n.weight == 0) continue;
+      size_t g = 0;
+      while (g < cell.count && (cell.group[g].slot != n.slot || cell.group[g].weight != n.weight)) ++g;
+      if (g == cell.count) cell.group[cell.count++] = {0, n.slot, n.weight};
+      cell.group[g].cells |= uint64_t{1} << n.bit;
+    }
+  }
+  return groups;
+}
+
 // The 19 of the 26 face, edge and corner neighbours that may precede: faces weigh 4, edges 2, corners 1.
-constexpr auto kNeighbours = MakeNeighbourTable<19>(0, 1, [](int dx, int dy, int dz) { return 8 >> ((dx != 0) + (dy != 0) + (dz != 0)); });
+constexpr auto kNeighbours = GroupNeighbours(
+    MakeNeighbourTable<19>(0, 1, [](int dx, int dy, int dz) { return 8 >> ((dx != 0) + (dy != 0) + (dz != 0)); }));
 // The 79 of the 98 cells two away (the 5x5x5 shell) that may precede, weighted by squared distance
 // d² 4 -> 3, 5 or 6 -> 2, 8, 9 or 12 -> 1 (the lossless coder's wide weights there).
-constexpr auto kFarNeighbours = MakeNeighbourTable<79>(1, 2, [](int dx, int dy, int dz) {
+constexpr auto kFarNeighbours = GroupNeighbours(MakeNeighbourTable<79>(1, 2, [](int dx, int dy, int dz) {
   const int d2 = dx * dx + dy * dy + dz * dz;
   return d2 == 4 ? 3 : d2 <= 6 ? 2 : 1;
-});
+}));
 
 }  // namespace
 
-WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()) {
-  for (size_t i = 0; i < morton.size(); ++i) {
-    const uint64_t code = morton[i] >> 6;
-    if (bricks_.empty() || bricks_.back().code != code) bricks_.push_back({code, static_cast<uint32_t>(i), 0});
-    bricks_.back().mask |= uint64_t{1} << (morton[i] & 63);
-  }
+WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()), bricks_(morton) {
   for (Cursor& c : recent_) c.current = SIZE_MAX;
-  if (!bricks_.empty()) {
+  if (!bricks_.all().empty()) {
     EnterBrick(weights_, 0);
     ends_ = weights_;
   }
@@ -85,7 +111,8 @@ WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morto
 
 void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
   size_t k = cursor.current;
-  while (k + 1 < bricks_.size() && bricks_[k + 1].start <= i) ++k;
+  const std::vector<VoxelBrick>& bricks = bricks_.all();
+  while (k + 1 < bricks.size() && bricks[k + 1].first <= i) ++k;
   if (k != cursor.current) EnterBrick(cursor, k);
 }
 
@@ -97,25 +124,27 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
     }
   }
   cursor.current = k;
-  const uint64_t code = bricks_[k].code;
-  for (int dx = -1; dx <= 1; ++dx) {
-    uint64_t cx = code;
-    const bool x_ok = Moved(code, 0, dx, cx);
-    for (int dy = -1; dy <= 1; ++dy) {
-      uint64_t cy = cx;
-      const bool y_ok = x_ok && Moved(cx, 1, dy, cy);
-      for (int dz = -1; dz <= 1; ++dz) {
-        Brick& near = cursor.near[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+  const uint64_t code = bricks_.all()[k].code;
+  // Each axis' bits moved by -1, 0, +1 once: a neighbour's code is one of each axis' ORed together.
+  std::array<std::array<uint64_t, 3>, 3> moved{};
+  std::array<std::array<bool, 3>, 3> inside{};
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int d = -1; d <= 1; ++d) {
+      uint64_t out = 0;
+      inside[axis][d + 1] = Moved(code, axis, d, out);
+      moved[axis][d + 1] = out & kAxisBits[axis];
+    }
+  }
+  const uint64_t rest = code & ~(kAxisBits[0] | kAxisBits[1] | kAxisBits[2]);
+  for (int x = 0; x < 3; ++x) {
+    for (int y = 0; y < 3; ++y) {
+      for (int z = 0; z < 3; ++z) {
+        VoxelBrick& near = cursor.near[x * 9 + y * 3 + z];
         near = {0, 0, 0};
-        uint64_t c = cy;
-        if (!y_ok || !Moved(cy, 2, dz, c) || c > code) continue;  // outside, or after this brick
-        // Bricks are sorted by code: gallop back from this one (neighbours are mostly near), then bisect.
-        size_t hi = k + 1, step = 1;
-        while (step <= hi && bricks_[hi - step].code > c) hi -= step, step *= 2;
-        const auto first = bricks_.begin() + static_cast<ptrdiff_t>(step <= hi ? hi - step : 0);
-        const auto last = bricks_.begin() + static_cast<ptrdiff_t>(hi);
-        const auto it = std::lower_bound(first, last, c, [](const Brick& b, uint64_t v) { return b.code < v; });
-        if (it != last && it->code == c) near = *it;
+        if (!inside[0][x] || !inside[1][y] || !inside[2][z]) continue;  // outside the grid
+        const uint64_t c = moved[0][x] | moved[1][y] | moved[2][z] | rest;
+        if (c > code) continue;  // after this brick
+        if (const VoxelBrick* found = bricks_.Find(c)) near = *found;
       }
     }
   }
@@ -125,10 +154,13 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
 
 template <typename Table, typename F>
 void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
-  for (const Neighbour& n : table[morton_[i] & 63]) {
-    const Brick& near = cursor.near[n.slot];
-    if (n.weight == 0 || !(near.mask >> n.bit & 1)) continue;
-    f(near.start + static_cast<size_t>(std::popcount(near.mask & ((uint64_t{1} << n.bit) - 1))), n.weight);
+  const auto& cell = table[morton_[i] & 63];
+  for (size_t g = 0; g < cell.count; ++g) {
+    const NeighbourGroup& group = cell.group[g];
+    const VoxelBrick& near = cursor.near[group.slot];
+    for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
+      f(size_t{near.IndexOf(std::countr_zero(present))}, group.weight);
+    }
   }
 }
 

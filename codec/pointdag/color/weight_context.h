@@ -14,14 +14,12 @@
 // neighbourhood no more than 3x3x3, the neighbours' spread or count as a second context less, the
 // mean of each neighbour's own clamped step the same.
 //
-// Neighbours are found through the voxels' 4x4x4 bricks (Morton code >> 6): per brick, its first
-// voxel's index and a 64-bit mask of its cells, so a neighbour's index is its brick's first index
-// plus the cells before it in the mask; the bricks around the current one are looked up once per
-// brick, and which cells a voxel's preceding neighbours are comes from a table per cell. Whole-file
-// decode of lion 1 cm at 38 dB (DecodePdag, one core): version 2 52 ms; version 3 with a hash table
-// of the codes (as the lossless colors use) 114 ms, with bricks 106, with the table and one
-// projection per weight (not per neighbour) 88. Version 4 walks the bricks twice (the endpoints' walk
-// runs ahead of the weights'), sharing the bricks last entered.
+// Neighbours are found through the voxels' 4x4x4 bricks (voxel_bricks.h): the bricks around the
+// current one are looked up once per brick, and which cells a voxel's preceding neighbours are
+// comes from a table per cell. Whole-file decode of lion 1 cm at 38 dB (DecodePdag, one core):
+// version 2 52 ms; version 3 with a hash table of the voxels' codes 114 ms, with bricks 106, with
+// the table and one projection per weight (not per neighbour) 88. Version 4 walks the bricks twice
+// (the endpoints' walk runs ahead of the weights'), sharing the bricks last entered.
 #pragma once
 
 #include <array>
@@ -30,6 +28,7 @@
 #include <vector>
 
 #include "pointdag/color/block_fit.h"
+#include "pointdag/color/voxel_bricks.h"
 
 namespace pointdag {
 
@@ -77,28 +76,23 @@ class WeightContexts {
   void Record(uint64_t i, const Rgb8& c) { decoded_[i] = c; }
 
  private:
-  struct Brick {
-    uint64_t code;   // Morton code >> 6
-    uint32_t start;  // index of its first voxel
-    uint64_t mask;   // bit (Morton code & 63) per voxel
-  };
   // A walk forward through the bricks: `near` holds brick `current`'s neighbour bricks that precede
   // it (and itself), by offset (dx + 1) * 9 + (dy + 1) * 3 + dz + 1 (its slot), with an empty mask
   // elsewhere. Weights and endpoints each walk with their own.
   struct Cursor {
     size_t current = 0;
-    std::array<Brick, 27> near{};
+    std::array<VoxelBrick, 27> near{};
   };
   void Seek(Cursor& cursor, uint64_t i);
   void EnterBrick(Cursor& cursor, size_t k);
-  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbours
-  // by its bit in the brick) that precedes it.
+  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbour
+  // groups by its bit in the brick) that precedes it.
   template <typename Table, typename F>
   void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
 
   std::span<const uint64_t> morton_;
   std::vector<Rgb8> decoded_;
-  std::vector<Brick> bricks_;
+  VoxelBricks bricks_;
   Cursor weights_, ends_;
   // The bricks most recently entered by either cursor: the other enters the same ones soon after.
   std::array<Cursor, 8> recent_{};
