@@ -45,9 +45,12 @@ constexpr int32_t kChromaWeights[3][3] = {{135, -94, -41}, {-94, 182, -88}, {-41
 constexpr uint64_t kChromaTimes = 4;
 
 uint64_t ChromaError(std::span<const Rgb8> colors, const Candidate& c, int bits) {
+  const Endpoints ends = c.fit->ends;  // a local copy: its axis is computed once, not per color
+  std::array<Rgb8, 1 << kMaxWeightBits> palette;  // Interpolate divides by a run-time 2^bits - 1
+  for (uint32_t w = 0; w < (1u << bits); ++w) palette[w] = Interpolate(ends, w, bits);
   int64_t e = 0;
   for (uint32_t i = c.start; i < c.start + c.length; ++i) {
-    const Rgb8 p = Interpolate(c.fit->ends, ChooseWeight(colors[i], c.fit->ends, bits), bits);
+    const Rgb8 p = palette[ChooseWeight(colors[i], ends, bits)];
     const int32_t d[3] = {colors[i].r - p.r, colors[i].g - p.g, colors[i].b - p.b};
     for (int j = 0; j < 3; ++j) e += d[j] * (kChromaWeights[j][0] * d[0] + kChromaWeights[j][1] * d[1] + kChromaWeights[j][2] * d[2]);
   }
