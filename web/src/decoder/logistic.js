@@ -34,3 +34,19 @@ export function mixerDomain(dot) {
   const d = Math.floor(dot / 65536);
   return d < -2047 ? -2047 : d > 2047 ? 2047 : d;
 }
+
+// The mixers' bias input, and one learning step for all of a row's weights (w[wi..], in the order of
+// the inputs given; a sixth input only for six-weight rows): w += input x err / 2^11, clamped to
+// ±2^22, as the C++ mixers do.
+export const MIXER_BIAS = 256;
+const MAX_WEIGHT = 1 << 22;
+const clampWeight = (v) => (v < -MAX_WEIGHT ? -MAX_WEIGHT : v > MAX_WEIGHT ? MAX_WEIGHT : v);
+
+export function trainMixer(w, wi, err, s0, s1, s2, s3, s4, s5) {
+  w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
+  w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
+  w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
+  w[wi + 3] = clampWeight(w[wi + 3] + ((s3 * err) >> 11));
+  w[wi + 4] = clampWeight(w[wi + 4] + ((s4 * err) >> 11));
+  if (s5 !== undefined) w[wi + 5] = clampWeight(w[wi + 5] + ((s5 * err) >> 11));
+}

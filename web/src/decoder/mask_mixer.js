@@ -4,12 +4,9 @@
 // learnt per (child, any bit set so far); one set for all classes, fresh per stream. Version 4
 // mixes two more: (mask so far, which of the node's six face neighbours exist) and (mask so far,
 // the child's plane memory state).
-import { SQUASH_TABLE, STRETCH, mixerDomain } from './logistic.js';
+import { MIXER_BIAS, SQUASH_TABLE, STRETCH, mixerDomain, trainMixer } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
-const BIAS = 256;
-const MAX_WEIGHT = 1 << 22;
-const clampWeight = (w) => (w < -MAX_WEIGHT ? -MAX_WEIGHT : w > MAX_WEIGHT ? MAX_WEIGHT : w);
 
 export class MaskMixer {
   // `more`: version 4's two models; without them their inputs stay 0 (version 3).
@@ -46,16 +43,11 @@ export class MaskMixer {
     const s2 = STRETCH[4096 - youngP0(this.par, q)];
     const s3 = this.more ? STRETCH[4096 - youngP0(this.sides, f)] : 0;
     const s4 = this.more ? STRETCH[4096 - youngP0(this.planes, g)] : 0;
-    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * BIAS + w[wi + 4] * s3 + w[wi + 5] * s4;
+    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * MIXER_BIAS + w[wi + 4] * s3 + w[wi + 5] * s4;
     const p1 = SQUASH_TABLE[mixerDomain(dot) + 2047];
     const bit = rc.fixedBit(4096 - p1);
     const err = (bit << 12) - p1;
-    w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
-    w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
-    w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
-    w[wi + 3] = clampWeight(w[wi + 3] + ((BIAS * err) >> 11));
-    w[wi + 4] = clampWeight(w[wi + 4] + ((s3 * err) >> 11));
-    w[wi + 5] = clampWeight(w[wi + 5] + ((s4 * err) >> 11));
+    trainMixer(w, wi, err, s0, s1, s2, MIXER_BIAS, s3, s4);
     youngUpdate(young, age, m, bit);
     youngUpdate(this.tree, this.treeAge, t, bit);
     youngUpdate(this.par, this.parAge, q, bit);

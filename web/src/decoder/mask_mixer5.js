@@ -2,14 +2,11 @@
 // bit for bit: the version 2 neighbour model, version 4's sides and planes models, the child-level
 // pattern model and the side model mixed by integer logistic mixing (weights per child and any bit
 // set so far), then refined by an APM interpolated between 33 buckets and averaged 3:1 with the mix.
-import { SQUASH_TABLE, STRETCH, mixerDomain, squash } from './logistic.js';
+import { MIXER_BIAS, SQUASH_TABLE, STRETCH, mixerDomain, squash, trainMixer } from './logistic.js';
 import { compactP0, compactUpdate, newModels, youngP0, youngUpdate } from './range_coder.js';
 import { PATTERN_COUNT } from './spatial_context.js';
 
-const BIAS = 256;
-const MAX_WEIGHT = 1 << 22;
 const APM_CONTEXTS = 8 * 8 * 8 * 4;
-const clampWeight = (w) => (w < -MAX_WEIGHT ? -MAX_WEIGHT : w > MAX_WEIGHT ? MAX_WEIGHT : w);
 
 // Where each (class group, child) block of the pattern model starts (kPatternBase).
 export const PATTERN_BASE = new Int32Array(3 * 8 + 1);
@@ -57,7 +54,7 @@ export class MaskMixer5 {
     const s2 = STRETCH[4096 - youngP0(this.planes, g)];
     const s3 = STRETCH[4096 - compactP0(this.pattern, pattern)];
     const s4 = STRETCH[4096 - youngP0(this.side, q)];
-    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * s4 + w[wi + 5] * BIAS;
+    const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * s4 + w[wi + 5] * MIXER_BIAS;
     const d = mixerDomain(dot);
     const p1 = SQUASH_TABLE[d + 2047];
     const x = d + 2048;
@@ -73,12 +70,7 @@ export class MaskMixer5 {
     table[a] += (((target - table[a]) >> 6) * (128 - near)) >> 7;
     table[a + 1] += (((target - table[a + 1]) >> 6) * near) >> 7;
     const err = (bit << 12) - p1;
-    w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
-    w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
-    w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
-    w[wi + 3] = clampWeight(w[wi + 3] + ((s3 * err) >> 11));
-    w[wi + 4] = clampWeight(w[wi + 4] + ((s4 * err) >> 11));
-    w[wi + 5] = clampWeight(w[wi + 5] + ((BIAS * err) >> 11));
+    trainMixer(w, wi, err, s0, s1, s2, s3, s4, MIXER_BIAS);
     youngUpdate(young, age, m, bit);
     youngUpdate(this.sides, this.sidesAge, f, bit);
     youngUpdate(this.planes, this.planesAge, g, bit);

@@ -5,7 +5,7 @@
 // previous; 48 + it two away), the previous weight, and the position in steps with the previous
 // weight's relation to it (else 64 + previous; 81 + them two away); mixer weights per (width,
 // depth in the tree).
-import { SQUASH_TABLE, STRETCH, mixerDomain } from './logistic.js';
+import { MIXER_BIAS, SQUASH_TABLE, STRETCH, mixerDomain, trainMixer } from './logistic.js';
 import { newModels, youngP0, youngUpdate } from './range_coder.js';
 
 const MAX_WEIGHT_BITS = 4;
@@ -15,9 +15,6 @@ const HALF_CONTEXTS = 79;
 const PREVIOUS_CONTEXTS = 17;
 const RELATION_CONTEXTS = 145;
 const INPUTS = 4;
-const BIAS = 256;
-const MAX_WEIGHT = 1 << 22;
-const clampWeight = (w) => (w < -MAX_WEIGHT ? -MAX_WEIGHT : w > MAX_WEIGHT ? MAX_WEIGHT : w);
 
 function modelRows(contexts) {
   const count = (MAX_WEIGHT_BITS + 1) * contexts * NODES;
@@ -62,15 +59,11 @@ export class WeightMixer {
       const s2 = STRETCH[4096 - youngP0(c.p, m2)];
       const s3 = STRETCH[4096 - youngP0(d.p, m3)];
       const wi = (bits * MAX_WEIGHT_BITS + depth) * (INPUTS + 1);
-      const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * BIAS;
+      const dot = w[wi] * s0 + w[wi + 1] * s1 + w[wi + 2] * s2 + w[wi + 3] * s3 + w[wi + 4] * MIXER_BIAS;
       const p1 = SQUASH_TABLE[mixerDomain(dot) + 2047];
       const bit = rc.fixedBit(4096 - p1);
       const err = (bit << 12) - p1;
-      w[wi] = clampWeight(w[wi] + ((s0 * err) >> 11));
-      w[wi + 1] = clampWeight(w[wi + 1] + ((s1 * err) >> 11));
-      w[wi + 2] = clampWeight(w[wi + 2] + ((s2 * err) >> 11));
-      w[wi + 3] = clampWeight(w[wi + 3] + ((s3 * err) >> 11));
-      w[wi + 4] = clampWeight(w[wi + 4] + ((BIAS * err) >> 11));
+      trainMixer(w, wi, err, s0, s1, s2, s3, MIXER_BIAS);
       youngUpdate(a.p, a.age, m0, bit);
       youngUpdate(b.p, b.age, m1, bit);
       youngUpdate(c.p, c.age, m2, bit);
