@@ -62,7 +62,8 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
   const VoxelGrid finest = SurfaceGrid();
   TilingOptions options;
   options.colors = {ColorCodec::kVariableRate, 40.0};
-  EXPECT_EQ(options.geometry_version, 2);
+  EXPECT_EQ(options.geometry_coder, GeometryCoder::kTable);
+  EXPECT_EQ(options.geometry_version, kTableStreamVersion);
   auto set = BuildTiles(finest, ScanInfo{}, "surface", options);
   ASSERT_TRUE(set.ok()) << set.status().ToString();
   EXPECT_EQ(set->levels, 3);

@@ -222,6 +222,28 @@ describe('geometry stream versions', () => {
       }
     }
   });
+  // Coder 3 (version 6, the tiles' stream): the seeds hold version 5's DAG; every cut is refused (the
+  // prefix-coded masks end the stream, without flush bytes); flips end in a PdagError or a valid DAG.
+  test('coder 3 decodes to the same DAG, and cut or flipped fails cleanly', () => {
+    for (const mode of ['leaves', 'mipmap']) {
+      const stream = seed(`${mode}_table.bin`);
+      assert.equal(stream[0], 6);
+      assert.equal(stream[1], 3);
+      assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
+    }
+    const stream = seed('leaves_table.bin');
+    for (let length = 0; length < stream.length; ++length) {
+      const cut = outcome((b) => decodeDag(b, 2 ** 32), stream.subarray(0, length), `cut at ${length}`);
+      assert.notEqual(cut.code, 'ok', `cut at ${length}`);
+    }
+    const next = prng(6);
+    for (let trial = 0; trial < 400; ++trial) {
+      const flipped = stream.slice();
+      const at = next(flipped.length);
+      flipped[at] ^= 1 << next(8);
+      outcome((b) => decodeDag(b, 2 ** 32), flipped, `bit flip ${trial} at ${at}`);
+    }
+  });
   // Version 5 merges the slots it decodes: a cut or flipped stream must still end in a PdagError or
   // in some valid DAG, never in an exception of another kind.
   test('version 5 cut or flipped fails cleanly', () => {

@@ -10,6 +10,7 @@
 
 #include "pointdag/dag/dag_arrays.h"
 #include "pointdag/dag/spatial_coder.h"
+#include "pointdag/dag/table_coder.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/entropy/zstd_stream.h"
@@ -235,12 +236,16 @@ const char* GeometryCoderName(GeometryCoder coder) {
     case GeometryCoder::kZstd: return "zstd";
     case GeometryCoder::kContext: return "context";
     case GeometryCoder::kSpatial: return "spatial";
+    case GeometryCoder::kTable: return "table";
   }
   return "?";
 }
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version) {
-  if (version < 1 || version > kGeometryStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
+  if (version < 1 || version > kTableStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
+  if ((coder == GeometryCoder::kTable) != (version == kTableStreamVersion)) {
+    return InvalidArgument("geometry coder 3 is stream version 6's, and version 6 is coder 3's");
+  }
   RETURN_IF_ERROR(dag.Validate());
   ASSIGN_OR_RETURN(const DagArrays arrays, ToArrays(dag));
   std::vector<uint8_t> out = {static_cast<uint8_t>(version), static_cast<uint8_t>(coder), static_cast<uint8_t>(dag.depth),
@@ -264,6 +269,11 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
     WriteSymbols(arrays, sink, dag.depth);
     return sink.Finish(std::move(out));
   }
+  if (coder == GeometryCoder::kTable) {
+    TableSink sink(dag.depth);
+    WriteSymbols(arrays, sink, dag.depth);
+    return sink.Finish(std::move(out));
+  }
   ContextSink sink;
   WriteSymbols(arrays, sink, dag.depth);
   return sink.Finish(std::move(out));
@@ -271,8 +281,12 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
-  if (bytes[0] < 1 || bytes[0] > kGeometryStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
-  if (bytes[1] > 2) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
+  if (bytes[0] < 1 || bytes[0] > kTableStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[1] > 3) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
+  if ((bytes[1] == 3) != (bytes[0] == kTableStreamVersion)) {
+    return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " names coder " + std::to_string(bytes[1]) +
+                   ": coder 3 is version 6's, and version 6 is coder 3's");
+  }
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];
   if (depth < 2 || depth > kMaxDepth) return Corrupt("geometry stream depth " + std::to_string(depth) + " is outside 2..21");
@@ -300,13 +314,19 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   } else {
     // The payload's size bounds the nodes it can hold.
     const uint64_t payload = bytes.size() - pos + 8;  // + the zero bytes the decoder may read past the end
-    const uint64_t per_byte = coder == GeometryCoder::kContext ? kMaxContextNodesPerByte : kMaxSpatialNodesPerByte;
+    const uint64_t per_byte = coder == GeometryCoder::kContext ? kMaxContextNodesPerByte
+                              : coder == GeometryCoder::kTable ? kMaxTableNodesPerByte
+                                                               : kMaxSpatialNodesPerByte;
     if (total > payload * per_byte) {
       return Corrupt("geometry stream declares " + std::to_string(total) + " nodes, more than its " +
                      std::to_string(bytes.size() - pos) + " bytes can hold");
     }
     if (coder == GeometryCoder::kContext) {
       ContextSource source(bytes.subspan(pos));
+      arrays = ReadSymbols(source, depth, counts);
+    } else if (coder == GeometryCoder::kTable) {
+      TableSource source;
+      RETURN_IF_ERROR(source.Open(bytes.subspan(pos), depth));
       arrays = ReadSymbols(source, depth, counts);
     } else {
       arrays = DecodeSpatial(bytes.subspan(pos), depth, counts, bytes[0]);

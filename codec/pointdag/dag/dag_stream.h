@@ -16,7 +16,9 @@
 //   bricks coded at every occurrence and merged by the decoder (spatial_coder.h); stream version 3
 //   mixes three models per mask bit (mask_mixer.h), version 4 five, version 5 five others with a
 //   secondary estimate (mask_mixer5.h) and codes the nodes of heights 3 and 4 at every occurrence
-//   too (slot_merge.h); decoding about 6x slower than kContext.
+//   too (slot_merge.h); decoding about 6x slower than kContext;
+// - kTable (stream version 6, tiles): the symbols of kZstd and kContext, each mask by table lookup
+//   in a prefix code per height, flags and references range-coded (table_coder.h).
 // DecodeDag() runs in linear time (in the stored DAG plus its brick occurrences) and returns the
 // identical resident DAG.
 #pragma once
@@ -29,15 +31,17 @@
 
 namespace pointdag {
 
-enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2 };
+enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2, kTable = 3 };
 const char* GeometryCoderName(GeometryCoder coder);
 
 // The stream version writers write (PDAG_FORMAT §2.2); 1..4 stay readable and writable: they
 // differ only in coder 2, version 3's costing 1.6x the decode time of version 2's, version 4's 1.2x
 // version 3's, version 5's 1.2x version 4's.
 constexpr int kGeometryStreamVersion = 5;
+// Version 6 is coder 3's, and coder 3 is version 6's: readers read 1..6.
+constexpr int kTableStreamVersion = 6;
 
-// `version`: 1..kGeometryStreamVersion.
+// `version`: 1..kGeometryStreamVersion for coders 0..2, kTableStreamVersion for kTable.
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version = kGeometryStreamVersion);
 
 // `max_nodes` bounds what a lying header may make the decoder allocate (nodes + bricks).

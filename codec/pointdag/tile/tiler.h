@@ -34,11 +34,11 @@ struct Tile {
 
 struct TilingOptions {
   int tile_depth = 8;
-  GeometryCoder geometry_coder = GeometryCoder::kSpatial;
-  // Tiles are decoded by every client on every view, files mostly kept: tiles take geometry stream
-  // version 2, which decodes 1.6x faster than version 3 (C++ and JavaScript alike) for ~2.5 % more
-  // geometry bits (docs/benchmarks.md, "mixed mask bits").
-  int geometry_version = 2;
+  // Tiles are decoded by every client on every view: they take geometry coder 3 (stream version 6),
+  // whose masks decode by table lookup, 2.4-3.2x the tile decode rate of coder 2 version 2 for
+  // 10-15 % more tile bytes (docs/benchmarks.md, "Tile stream for decode speed").
+  GeometryCoder geometry_coder = GeometryCoder::kTable;
+  int geometry_version = kTableStreamVersion;
   ColorEncodeOptions colors{ColorCodec::kVariableRate, 38.0};
   ProgressFn progress;  // (tiles done, tiles total)
 };

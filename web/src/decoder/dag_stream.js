@@ -8,7 +8,8 @@
 // voxel count, bottom-up, as doubles (exact far beyond any limit they are compared with).
 import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
 import { GrowableU32 } from './growable_u32.js';
-import { GAMMA_MODELS, RangeDecoder, bitWidth, newModels } from './range_coder.js';
+import { GAMMA_MODELS, RangeDecoder, bitTreeModels, bitWidth, newModels } from './range_coder.js';
+import { PREFIX_CODE_BITS, PrefixDecoder, buildPrefixTable } from './prefix_code.js';
 import { decodeSpatial } from './spatial_coder.js';
 import { readVarint } from './varint.js';
 
@@ -16,15 +17,18 @@ export const MAX_DEPTH = 21;
 export const COUNT_LEAVES = 0;
 export const COUNT_MIPMAP = 1;
 
-// Versions 2..5 change coder 2 only; versions 1..4 still decode.
+// Versions 2..5 change coder 2 only; versions 1..4 still decode; version 6 is coder 3's.
 const STREAM_VERSION = 5;
+const TABLE_STREAM_VERSION = 6;
 const CODER_ZSTD = 0;
 const CODER_CONTEXT = 1;
 const CODER_SPATIAL = 2;
+const CODER_TABLE = 3;
 // A coded bit costs at least 0.0014 bits and a node one 8-bit mask: a byte holds < 720 nodes
-// (coder 1); coder 2 codes at least 7 bits a mask: < 820.
+// (coder 1); coder 2 codes at least 7 bits a mask: < 820; coder 3 at least 1 bit a mask: 8.
 const MAX_CONTEXT_NODES_PER_BYTE = 720;
 const MAX_SPATIAL_NODES_PER_BYTE = 820;
+const MAX_TABLE_NODES_PER_BYTE = 8;
 
 // Context classes: internal nodes by height (3..21), brick cell masks (2), brick voxel masks (1).
 const VOXEL_CLASS = 1;
@@ -34,6 +38,11 @@ const MASK_BASE = 0;
 const FLAG_BASE = CLASSES * 256;
 const REF_BASE = FLAG_BASE + CLASSES;
 const MODEL_COUNT = REF_BASE + CLASSES * GAMMA_MODELS;
+// Coder 3's range-coded section adds: whether a class sends code lengths, and the lengths' 4-bit
+// trees by the previous symbol's length.
+const TABLE_CODED = MODEL_COUNT;
+const LENGTH_BASE = TABLE_CODED + 1;
+const TABLE_MODEL_COUNT = LENGTH_BASE + (PREFIX_CODE_BITS + 1) * bitTreeModels(4);
 
 export const popcount32 = (v) => {
   v -= (v >>> 1) & 0x55555555;
@@ -49,9 +58,50 @@ function brickMipCount(lo, hi) {
   return 1 + cells + popcount32(lo) + popcount32(hi);
 }
 
-function readSymbols(rc, depth, mode, counts) {
+// Coder 1's masks: a bit tree per class in the range-coded stream.
+class ContextMasks {
+  constructor(rc, p) {
+    this.rc = rc;
+    this.p = p;
+  }
+  mask(cls) {
+    return this.rc.bitTree(this.p, MASK_BASE + cls * 256, 8);
+  }
+  overrun() {
+    return false;  // the range decoder's own
+  }
+}
+
+// Coder 3's masks: a canonical prefix code per class 1..depth, its lengths read from `rc` (the
+// range-coded section) as table_coder.cc writes them; the masks follow the section.
+class TableMasks {
+  constructor(rc, p, bytes, start, depth) {
+    this.tables = [null];
+    const lengths = new Uint8Array(256);
+    for (let cls = 1; cls <= depth; ++cls) {
+      const coded = rc.bit(p, TABLE_CODED);
+      let previous = 0;
+      for (let s = 1; s < 256; ++s) {
+        lengths[s] = coded ? rc.bitTree(p, LENGTH_BASE + previous * bitTreeModels(4), 4) : 8;
+        if (lengths[s] > PREFIX_CODE_BITS) throw corrupt('geometry stream holds a mask code longer than 12 bits');
+        previous = lengths[s];
+      }
+      this.tables.push(buildPrefixTable(lengths));
+    }
+    if (rc.overrun()) throw corrupt('geometry stream ends inside its code tables');
+    this.bits = new PrefixDecoder(bytes, start, bytes.length);
+  }
+  mask(cls) {
+    const s = this.bits.get(this.tables[cls]);
+    return s < 0 ? 0 : s;
+  }
+  overrun() {
+    return this.bits.overrun();
+  }
+}
+
+function readSymbols(rc, p, source, depth, mode, counts) {
   const levels = depth - 2;
-  const p = newModels(MODEL_COUNT);
   const masks = [];
   const firstChild = [];
   const children = [];
@@ -61,14 +111,13 @@ function readSymbols(rc, depth, mode, counts) {
     const levelMasks = new Uint8Array(n);
     const first = new Uint32Array(n + 1);
     const kids = new GrowableU32(Math.min(8 * n, 2 * counts[level + 1]));
-    const maskBase = MASK_BASE + cls * 256;
     const flagModel = FLAG_BASE + cls;
     const refBase = REF_BASE + cls * GAMMA_MODELS;
     const nextCount = counts[level + 1];
     let seen = 0;
     for (let i = 0; i < n; ++i) {
-      const mask = rc.bitTree(p, maskBase, 8);
-      if (mask === 0 || rc.overrun()) throw corrupt('geometry stream holds an empty or missing node mask');
+      const mask = source.mask(cls);
+      if (mask === 0 || rc.overrun() || source.overrun()) throw corrupt('geometry stream holds an empty or missing node mask');
       levelMasks[i] = mask;
       first[i] = kids.n;
       for (let c = POPCOUNT8[mask]; c > 0; --c) {
@@ -92,16 +141,14 @@ function readSymbols(rc, depth, mode, counts) {
   const bricks = counts[levels];
   const brickLo = new Uint32Array(bricks);
   const brickHi = new Uint32Array(bricks);
-  const cellBase = MASK_BASE + BRICK_CELL_CLASS * 256;
-  const voxelBase = MASK_BASE + VOXEL_CLASS * 256;
   for (let i = 0; i < bricks; ++i) {
-    const cells = rc.bitTree(p, cellBase, 8);
+    const cells = source.mask(BRICK_CELL_CLASS);
     if (cells === 0) throw corrupt('geometry stream holds an empty brick');
     let lo = 0;
     let hi = 0;
     for (let c = 0; c < 8; ++c) {
       if (!((cells >> c) & 1)) continue;
-      const voxels = rc.bitTree(p, voxelBase, 8);
+      const voxels = source.mask(VOXEL_CLASS);
       if (voxels === 0) throw corrupt('geometry stream holds an empty brick cell');
       if (c < 4) lo |= voxels << (8 * c);
       else hi |= voxels << (8 * (c - 4));
@@ -109,7 +156,7 @@ function readSymbols(rc, depth, mode, counts) {
     brickLo[i] = lo;
     brickHi[i] = hi;
   }
-  if (rc.overrun()) throw corrupt('geometry stream ends early');
+  if (rc.overrun() || source.overrun()) throw corrupt('geometry stream ends early');
   return { depth, mode, levels, masks, firstChild, children, brickLo, brickHi };
 }
 
@@ -161,8 +208,11 @@ function addCounts(dag) {
 // `maxNodes` bounds what a lying level table may make the decoder allocate (nodes + bricks).
 export function decodeDag(bytes, maxNodes) {
   if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
-  if (!(bytes[0] >= 1 && bytes[0] <= STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
-  if (bytes[1] > CODER_SPATIAL) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
+  if (!(bytes[0] >= 1 && bytes[0] <= TABLE_STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
+  if (bytes[1] > CODER_TABLE) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
+  if ((bytes[1] === CODER_TABLE) !== (bytes[0] === TABLE_STREAM_VERSION)) {
+    throw corrupt(`geometry stream version ${bytes[0]} names coder ${bytes[1]}: coder 3 is version 6's, and version 6 is coder 3's`);
+  }
   const depth = bytes[2];
   if (depth < 2 || depth > MAX_DEPTH) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);
   if (bytes[3] > 1) throw corrupt(`geometry stream names unknown count mode ${bytes[3]}`);
@@ -183,12 +233,29 @@ export function decodeDag(bytes, maxNodes) {
   if (counts[0] !== 1) throw corrupt('geometry stream must have exactly one root');
   if (bytes[1] === CODER_ZSTD) throw unsupported('the geometry stream is zstd-coded; this decoder reads the range coders only');
   const payload = bytes.length - cursor.pos + 8;  // + the zero bytes the decoder may read past the end
-  const perByte = bytes[1] === CODER_CONTEXT ? MAX_CONTEXT_NODES_PER_BYTE : MAX_SPATIAL_NODES_PER_BYTE;
+  const perByte = bytes[1] === CODER_CONTEXT ? MAX_CONTEXT_NODES_PER_BYTE
+    : bytes[1] === CODER_TABLE ? MAX_TABLE_NODES_PER_BYTE : MAX_SPATIAL_NODES_PER_BYTE;
   if (total > payload * perByte) {
     throw corrupt(`geometry stream declares ${total} nodes, more than its ${bytes.length - cursor.pos} bytes can hold`);
   }
-  const rc = new RangeDecoder(bytes, cursor.pos);
-  const dag = bytes[1] === CODER_CONTEXT ? readSymbols(rc, depth, mode, counts) : { ...decodeSpatial(rc, depth, counts, bytes[0]), mode };
+  let dag;
+  if (bytes[1] === CODER_TABLE) {
+    const section = readVarint(bytes, cursor);
+    if (section < 0) throw corrupt('geometry stream ends inside its section length');
+    if (section > bytes.length - cursor.pos) throw corrupt('geometry stream is shorter than its section length says');
+    const end = cursor.pos + section;
+    const rc = new RangeDecoder(bytes, cursor.pos, end);
+    const p = newModels(TABLE_MODEL_COUNT);
+    dag = readSymbols(rc, p, new TableMasks(rc, p, bytes, end, depth), depth, mode, counts);
+  } else {
+    const rc = new RangeDecoder(bytes, cursor.pos);
+    if (bytes[1] === CODER_CONTEXT) {
+      const p = newModels(MODEL_COUNT);
+      dag = readSymbols(rc, p, new ContextMasks(rc, p), depth, mode, counts);
+    } else {
+      dag = { ...decodeSpatial(rc, depth, counts, bytes[0]), mode };
+    }
+  }
   addCounts(dag);
   return dag;
 }
