@@ -367,7 +367,7 @@ class LosslessTest : public ::testing::TestWithParam<testing::ScanAtVoxel> {};
 
 // Bit-exact with the neighbours found by Morton code (leaf mode) and from the previous color alone
 // (mipmap mode's order), and smaller than the zstd differences of version 1 ever were; the
-// version 2 sections that older files hold decode bit-exact too, and are larger.
+// version 3 and 2 sections that older files hold decode bit-exact too, and are no smaller.
 TEST_P(LosslessTest, RoundTripsBitExactInBothModesAndVersions) {
   SKIP_WITHOUT_DATA();
   EncodeOptions options;
@@ -385,14 +385,33 @@ TEST_P(LosslessTest, RoundTripsBitExactInBothModesAndVersions) {
     EXPECT_TRUE(*decoded == grid.colors) << mode;
     EXPECT_LT(encoded->bytes.size(), 3 * grid.colors.size());
 
-    std::vector<uint8_t> version2 = {static_cast<uint8_t>(ColorCodec::kLossless)};
-    auto payload = EncodeLosslessContext(grid.colors, morton, 2);
-    ASSERT_TRUE(payload.ok()) << payload.status().ToString();
-    version2.insert(version2.end(), payload->begin(), payload->end());
-    decoded = DecodeColors(version2, grid.colors.size(), grid.morton);
-    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
-    EXPECT_TRUE(*decoded == grid.colors) << mode << ", version 2";
-    EXPECT_LT(encoded->bytes.size(), version2.size()) << mode;
+    // Older versions (files written before version 4: 3; before 3: 2) decode bit-exact, and are
+    // no smaller: version 4 with layout 0 is version 3 plus its layout byte.
+    size_t older_size = 0;
+    for (int version : {3, 2}) {
+      std::vector<uint8_t> older = {static_cast<uint8_t>(ColorCodec::kLossless)};
+      auto payload = EncodeLosslessContext(grid.colors, morton, version);
+      ASSERT_TRUE(payload.ok()) << payload.status().ToString();
+      older.insert(older.end(), payload->begin(), payload->end());
+      decoded = DecodeColors(older, grid.colors.size(), grid.morton);
+      ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+      EXPECT_TRUE(*decoded == grid.colors) << mode << ", version " << version;
+      EXPECT_LE(encoded->bytes.size(), older.size() + 1) << mode << ", version " << version;
+      if (version == 2) {
+        EXPECT_LT(older_size, older.size()) << mode << ": version 3 smaller than 2";
+      }
+      older_size = older.size();
+    }
+    // The column layout (neighbour mode only) decodes bit-exact whether or not the encoder chose it.
+    if (!morton.empty()) {
+      std::vector<uint8_t> columns = {static_cast<uint8_t>(ColorCodec::kLossless)};
+      auto payload = EncodeLosslessContext(grid.colors, morton, 4, uint8_t{8});
+      ASSERT_TRUE(payload.ok()) << payload.status().ToString();
+      columns.insert(columns.end(), payload->begin(), payload->end());
+      decoded = DecodeColors(columns, grid.colors.size(), grid.morton);
+      ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+      EXPECT_TRUE(*decoded == grid.colors) << "columns";
+    }
   }
 }
 
@@ -441,13 +460,15 @@ TEST(ColorCodec, CompressedSizesAreStable) {
   // rate-distortion cut, 8773 before it weighed chroma 6:5:5.
   EXPECT_EQ(EncodeColors(scan->grid.colors, vbr, scan->grid.morton)->bytes.size(), 9097u);
   EXPECT_EQ(EncodeColors(scan->grid.colors, fixed, scan->grid.morton)->bytes.size(), 7185u);
-  // Lossless version 3 (decisions mixed from four context models, ±4 for voxels with few
-  // neighbours, cell means for those with none): from neighbours found by Morton code, and from the previous color alone (mipmap
-  // order). Version 2 (one gamma code per context) took 46515 and 54085 bytes, version 1 (zstd
-  // differences) 72993.
+  // Lossless version 4 (version 3's coder; the encoder chose the columns around each voxel, at any
+  // height, for this airborne scan, and G leading; in mipmap order G leading, plus the layout
+  // byte): from neighbours found by Morton code, and from the previous color alone (mipmap order).
+  // Version 3 (decisions mixed from four context models, ±4 for voxels with few neighbours, cell
+  // means for those with none) took 45224 and 53167 bytes, version 2 (one gamma code per context)
+  // 46515 and 54085, version 1 (zstd differences) 72993.
   const ColorEncodeOptions lossless{ColorCodec::kLossless, std::nullopt};
-  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless, scan->grid.morton)->bytes.size(), 45224u);
-  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless)->bytes.size(), 53167u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless, scan->grid.morton)->bytes.size(), 44200u);
+  EXPECT_EQ(EncodeColors(scan->grid.colors, lossless)->bytes.size(), 53168u);
 }
 
 }  // namespace

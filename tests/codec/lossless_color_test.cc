@@ -1,4 +1,4 @@
-// The lossless colors section (codec 1): versions 3 (written) and 2, the context coders predicting
+// The lossless colors section (codec 1): versions 4 (written), 3 and 2, the context coders predicting
 // from decoded neighbours (lossless_context.h), on edge cases and hostile bytes; version 1 (zstd)
 // still decodes.
 // The real scans' round trips are in color_test.cc (LosslessTest).
@@ -6,6 +6,8 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <optional>
 #include <random>
 #include <set>
 #include <utility>
@@ -44,9 +46,11 @@ std::vector<Rgb8> RandomColors(size_t n, uint32_t seed) {
   return c;
 }
 
-// The section of codec 1 with a version-2 or -3 payload.
-std::vector<uint8_t> LosslessSection(const std::vector<Rgb8>& colors, const std::vector<uint64_t>& morton, int version) {
-  auto payload = EncodeLosslessContext(colors, morton, version);
+// The section of codec 1 with a version-2, -3 or -4 payload (version 4: the encoder's layout, or
+// `layout`).
+std::vector<uint8_t> LosslessSection(const std::vector<Rgb8>& colors, const std::vector<uint64_t>& morton, int version,
+                                     std::optional<uint8_t> layout = std::nullopt) {
+  auto payload = EncodeLosslessContext(colors, morton, version, layout);
   EXPECT_TRUE(payload.ok()) << payload.status().ToString();
   std::vector<uint8_t> section = payload.ok() ? *payload : std::vector<uint8_t>{};
   section.insert(section.begin(), static_cast<uint8_t>(ColorCodec::kLossless));
@@ -57,11 +61,41 @@ void ExpectRoundTrip(const std::vector<Rgb8>& colors, const std::vector<uint64_t
   auto encoded = EncodeColors(colors, {ColorCodec::kLossless, std::nullopt}, morton);
   ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
   EXPECT_EQ(encoded->bytes, LosslessSection(colors, morton, kLosslessContextVersion));
-  for (int version : {2, 3}) {
+  for (int version : {2, 3, 4}) {
     auto decoded = DecodeColors(LosslessSection(colors, morton, version), colors.size(), morton);
     ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
     EXPECT_EQ(*decoded, colors) << "version " << version;
   }
+  // Every layout of version 4 (the columns with neighbours only).
+  for (int layout : {0, 1, 2, 3, 4, 5, 8, 9, 10, 11, 12, 13}) {
+    if (layout >= 8 && morton.empty()) continue;
+    auto decoded = DecodeColors(LosslessSection(colors, morton, 4, static_cast<uint8_t>(layout)), colors.size(), morton);
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    EXPECT_EQ(*decoded, colors) << "layout " << layout;
+  }
+}
+
+// Voxels at several heights per (x, y) column whose colors depend on (x, y) alone, as an airborne
+// scan's colors from an orthophoto: the encoder chooses the columns, and they pay.
+TEST(LosslessColors, ColumnsPayWhereColorsFollowTheImage) {
+  std::mt19937 rng(12);
+  std::set<uint64_t> cloud;
+  while (cloud.size() < 6000) {
+    cloud.insert(MortonEncode(static_cast<uint32_t>(rng() % 96), static_cast<uint32_t>(rng() % 96), static_cast<uint32_t>(rng() % 64)));
+  }
+  const std::vector<uint64_t> morton(cloud.begin(), cloud.end());
+  std::vector<Rgb8> colors(morton.size());
+  for (size_t i = 0; i < morton.size(); ++i) {
+    const auto [x, y, z] = MortonDecode(morton[i]);
+    const auto wave = [](uint32_t v, uint32_t k) { return static_cast<uint8_t>(128 + 100 * std::sin(v * 0.1 * k)); };
+    colors[i] = {wave(x, 1), wave(x + y, 2), wave(y, 3)};
+  }
+  const auto chosen = LosslessSection(colors, morton, 4);
+  ASSERT_GT(chosen.size(), 5u);
+  EXPECT_NE(chosen[5] & 8, 0) << "the layout byte after codec, version, mode and a 2-byte count";
+  EXPECT_LT(chosen.size(), LosslessSection(colors, morton, 4, uint8_t{0}).size());
+  EXPECT_LT(chosen.size(), LosslessSection(colors, morton, 3).size());
+  ExpectRoundTrip(colors, morton);
 }
 
 // The bricks find what a search of every earlier voxel finds, at the grid's edges too.
@@ -136,12 +170,24 @@ TEST(LosslessColors, OnlyKnownVersionsAreWrittenOrRead) {
   const auto morton = DenseMorton(100);
   const auto colors = RandomColors(morton.size(), 9);
   EXPECT_EQ(EncodeLosslessContext(colors, morton, 1).status().code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(EncodeLosslessContext(colors, morton, 4).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeLosslessContext(colors, morton, 5).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeLosslessContext(colors, morton, 4, uint8_t{6}).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeLosslessContext(colors, {}, 4, uint8_t{8}).status().code(), StatusCode::kInvalidArgument);
   auto section = LosslessSection(colors, morton, 3);
-  for (int version : {0, 1, 4, 255}) {
+  for (int version : {0, 1, 5, 255}) {
     section[1] = static_cast<uint8_t>(version);
     EXPECT_FALSE(DecodeColors(section, colors.size(), morton).ok()) << version;
   }
+  // Version 4's layout byte (after codec, version, mode and the 1-byte count): orders 6 and 7,
+  // bits above the columns' are no layout; columns without the voxels' codes are refused.
+  section = LosslessSection(colors, morton, 4, uint8_t{8});
+  for (int layout : {6, 7, 14, 15, 16, 255}) {
+    section[4] = static_cast<uint8_t>(layout);
+    EXPECT_EQ(DecodeColors(section, colors.size(), morton).status().code(), StatusCode::kCorrupt) << layout;
+  }
+  section = LosslessSection(colors, {}, 4, uint8_t{1});
+  section[4] = 9;
+  EXPECT_EQ(DecodeColors(section, colors.size()).status().code(), StatusCode::kCorrupt);
 }
 
 class LosslessHostileTest : public ::testing::TestWithParam<int> {};
@@ -184,7 +230,7 @@ TEST_P(LosslessHostileTest, HostileSectionsAreCleanErrors) {
   EXPECT_EQ(DecodeColors(lie, huge).status().code(), StatusCode::kCorrupt);
 }
 
-INSTANTIATE_TEST_SUITE_P(Versions, LosslessHostileTest, ::testing::Values(2, 3));
+INSTANTIATE_TEST_SUITE_P(Versions, LosslessHostileTest, ::testing::Values(2, 3, 4));
 
 }  // namespace
 }  // namespace pointdag

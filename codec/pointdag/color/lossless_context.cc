@@ -6,6 +6,7 @@
 
 #include "pointdag/color/lossless_mixing.h"
 #include "pointdag/color/lossless_predict.h"
+#include "pointdag/color/lossless_transform.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/varint.h"
 
@@ -79,22 +80,59 @@ bool DecodeGammaResiduals(std::span<const uint8_t> coded, std::span<Rgb8> colors
   return io.rc.consumed_exactly();
 }
 
+// Version 4: version 3's coder on the colors in the layout's channel order.
+std::vector<uint8_t> EncodeLaid(std::span<const Rgb8> colors, std::span<const uint64_t> morton, Layout layout) {
+  std::vector<Rgb8> reordered(colors.size());
+  std::transform(colors.begin(), colors.end(), reordered.begin(), [&layout](Rgb8 c) { return Reorder(c, layout.order); });
+  return EncodeMixed(reordered, morton, layout.columns);
+}
+
+// The layout that codes the first colors smallest: their bytes are what they would be in the whole
+// stream (each color is coded from earlier ones only), and the first eighth (at least 16384) of
+// the Morton order is a region of the scan large enough to tell an airborne scan's columns from a
+// close-up's. Column mode first (order 0), then the channel order with it.
+Layout ChooseLayout(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
+  constexpr size_t kMinSample = 16384;
+  const size_t n = std::min(colors.size(), std::max(kMinSample, colors.size() / 8));
+  const auto sample = colors.first(n);
+  const auto sample_morton = morton.empty() ? morton : morton.first(n);
+  Layout best;
+  size_t best_size = EncodeLaid(sample, sample_morton, best).size();
+  const auto consider = [&](Layout layout) {
+    const size_t size = EncodeLaid(sample, sample_morton, layout).size();
+    if (size < best_size) best = layout, best_size = size;
+  };
+  if (!morton.empty()) consider({0, true});
+  const bool columns = best.columns;
+  for (int order = 1; order < kChannelOrders; ++order) consider({order, columns});
+  return best;
+}
+
 }  // namespace
 
 StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
-                                                     int version) {
+                                                     int version, std::optional<uint8_t> layout_byte) {
   if (!morton.empty() && morton.size() != colors.size()) return InvalidArgument("lossless colors: one Morton code per color");
   if (uint64_t{colors.size()} >= (uint64_t{1} << 32)) return InvalidArgument("lossless colors: too many colors");
-  if (version != 2 && version != kLosslessContextVersion) return InvalidArgument("lossless colors: no version " + std::to_string(version));
+  if (version < 2 || version > kLosslessContextVersion) return InvalidArgument("lossless colors: no version " + std::to_string(version));
   std::vector<uint8_t> out = {static_cast<uint8_t>(version), morton.empty() ? kModePrevious : kModeNeighbours};
   PutVarint(out, colors.size());
-  const std::vector<uint8_t> coded = version == 2 ? EncodeGammaResiduals(colors, morton) : EncodeMixed(colors, morton);
+  Layout layout;  // version 3's: the coder of version 4 with order 0 and no columns
+  if (version >= 4) {
+    if (!layout_byte) {
+      layout = ChooseLayout(colors, morton);
+    } else if (!LayoutOf(*layout_byte, layout) || (layout.columns && morton.empty())) {
+      return InvalidArgument("lossless colors: no layout " + std::to_string(*layout_byte));
+    }
+    out.push_back(layout.Byte());
+  }
+  const std::vector<uint8_t> coded = version == 2 ? EncodeGammaResiduals(colors, morton) : EncodeLaid(colors, morton, layout);
   out.insert(out.end(), coded.begin(), coded.end());
   return out;
 }
 
 bool IsLosslessContextPayload(std::span<const uint8_t> payload) {
-  return !payload.empty() && (payload[0] == 2 || payload[0] == kLosslessContextVersion);
+  return !payload.empty() && payload[0] >= 2 && payload[0] <= kLosslessContextVersion;
 }
 
 StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> payload, uint64_t count,
@@ -108,6 +146,12 @@ StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> paylo
   if (!GetVarint(payload, pos, n)) return Truncated("lossless colors count");
   if (n != count) return Corrupt("lossless colors do not hold one RGB per voxel");
   if (count >= (uint64_t{1} << 32)) return ResourceLimit("lossless colors: too many colors");
+  Layout layout;
+  if (payload[0] >= 4) {
+    if (pos >= payload.size()) return Truncated("lossless colors layout");
+    if (!LayoutOf(payload[pos++], layout)) return Corrupt("lossless colors: unknown layout " + std::to_string(payload[pos - 1]));
+    if (layout.columns && mode != kModeNeighbours) return Corrupt("lossless colors: columns without neighbours");
+  }
   const std::span<const uint8_t> coded = payload.subspan(pos);
   if (count / kMaxColorsPerByte > coded.size() + 8) return Corrupt("lossless colors: more colors than the bytes can hold");
   if (mode == kModeNeighbours && morton.size() != count) {
@@ -117,8 +161,9 @@ StatusOr<std::vector<Rgb8>> DecodeLosslessContext(std::span<const uint8_t> paylo
   }
   std::vector<Rgb8> colors(count);
   const std::span<const uint64_t> codes = mode == kModeNeighbours ? morton : std::span<const uint64_t>{};
-  const bool exact = payload[0] == 2 ? DecodeGammaResiduals(coded, colors, codes) : DecodeMixed(coded, colors, codes);
+  const bool exact = payload[0] == 2 ? DecodeGammaResiduals(coded, colors, codes) : DecodeMixed(coded, colors, codes, layout.columns);
   if (!exact) return Corrupt("lossless colors: the stream does not end where its colors do");
+  for (Rgb8& c : colors) c = Restore(c, layout.order);
   return colors;
 }
 

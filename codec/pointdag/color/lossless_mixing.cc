@@ -83,12 +83,12 @@ constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;
 // and G's spreads. R (B alike, with its own spread) by s(R-G) and |eg|; s(R-G), eg's sign and |eg|;
 // nothing (for B: er); and G's spread and |eg|.
 template <class Io>
-void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
+void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton, bool columns) {
   constexpr int s = 2 * kSpreadBuckets, r = kResidualBuckets;
   auto g = std::make_unique<ChannelCoder>(std::array<int, kModels>{s, s * 8, 1, 64});
   auto red = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 1, 8 * r});
   auto blue = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 32, 8 * r});
-  Predictor predict(morton, 3);
+  Predictor predict(morton, 3, columns);
   Share share_r, share_b;
   int last_eg = 0;
   for (size_t i = 0; i < colors.size(); ++i) {
@@ -140,16 +140,17 @@ struct DecodeIo {
 
 }  // namespace
 
-std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
+std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton, bool columns) {
   std::vector<Rgb8> scratch(colors.begin(), colors.end());
   EncodeIo io;
-  CodeColors(io, scratch, morton);
+  CodeColors(io, scratch, morton, columns);
   return io.rc.Finish();
 }
 
-bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
+bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton,
+                 bool columns) {
   DecodeIo io{BinaryRangeDecoder(coded)};
-  CodeColors(io, colors, morton);
+  CodeColors(io, colors, morton, columns);
   return io.rc.consumed_exactly();
 }
 

@@ -13,10 +13,12 @@
 namespace pointdag::lossless {
 
 // The range-coded colors (the payload after its header). `morton`: empty (each color predicted
-// from the previous one) or one code per color, sorted and unique.
-std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton);
+// from the previous one) or one code per color, sorted and unique. `columns` (version 4's column
+// mode, with `morton` only): the predictions take the columns around each voxel too.
+std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton, bool columns = false);
 
 // Decodes colors.size() colors into `colors`; false when `coded` does not end where they do.
-bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton);
+bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton,
+                 bool columns = false);
 
 }  // namespace pointdag::lossless

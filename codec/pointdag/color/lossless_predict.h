@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "pointdag/color/causal_columns.h"
 #include "pointdag/color/causal_neighbours.h"
 #include "pointdag/voxelize/voxelizer.h"
 
@@ -70,7 +71,7 @@ class Gather {
   }
 
  private:
-  std::array<std::pair<size_t, int>, 9 * 9 * 9 - 1> items_{};  // the ±4 box
+  std::array<std::pair<size_t, int>, 9 * 9 * 9 - 1 + 13 * 13> items_{};  // the ±4 box, the columns within ±6
   size_t n_ = 0;
 };
 
@@ -121,10 +122,12 @@ class CellMeans {
 // and the one that missed less on the adjacent decoded voxels predicts. Version 2 looks within ±4
 // (weights kFar) only for a voxel with none within ±2, and falls back on the previous color;
 // version 3 adds those within ±4 for a voxel with fewer than 4 (weights kWideFar), and falls back
-// on CellMeans. Without Morton codes (mipmap colors): the previous color.
+// on CellMeans. Version 4 may add, by the stream's choice, the last decoded voxels of the columns
+// around the voxel, at any height (CausalColumns). Without Morton codes (mipmap colors): the
+// previous color.
 class Predictor {
  public:
-  Predictor(std::span<const uint64_t> morton, int version);
+  Predictor(std::span<const uint64_t> morton, int version, bool columns = false);
   Prediction operator()(std::span<const Rgb8> colors, size_t i);
   // After color i is known: how far each weighting was from it.
   void Record(size_t i, const Rgb8& c);
@@ -133,6 +136,7 @@ class Predictor {
   int version_;
   std::optional<CausalNeighbours> neighbours_;
   std::optional<CellMeans> cells_;
+  std::optional<CausalColumns> columns_;
   std::vector<std::array<uint16_t, 2>> misses_;
   Prediction near_, wide_;
   Gather gather_;
