@@ -1,13 +1,19 @@
 #include "pointdag/ingest.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <future>
 
 #include "pointdag/compare/point_metrics.h"
+#include "pointdag/read/remembering_reader.h"
 
 namespace pointdag {
 namespace {
+
+// Scans up to 2 M points (60 MB at 30 bytes a point) are read and georeferenced once, not three
+// times (spacing sample, survey, voxelizing): on them the fixed costs weigh most.
+constexpr uint64_t kRememberedPoints = uint64_t{1} << 21;
 
 // The first points of a scan, for its spacing; the reader is rewound.
 StatusOr<PointBatch> SpacingSample(ScanReader& reader) {
@@ -55,6 +61,8 @@ StatusOr<IngestedScan> IngestScan(const std::filesystem::path& path, const Inges
   report("survey", 0);
   ASSIGN_OR_RETURN(FramedReader framed, OpenScanInFrame(path, options.epsg));
   out.frame = std::move(framed.frame);
+  framed.reader = std::make_unique<RememberingReader>(std::move(framed.reader),
+                                                      std::min(kRememberedPoints, options.max_points_in_memory));
   VoxelizeOptions vopt;
   vopt.voxel_size = options.voxel_size;
   // The spacing's nearest-neighbour search (one core) runs beside the survey pass, which does not

@@ -2,6 +2,7 @@
 // choice picked, price 0 keeps the error-minimizing weights, and a price saves weight bits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "pointdag/color/block_codec.h"
@@ -80,13 +81,15 @@ TEST(WeightChoice, AHigherPriceSavesBitsForError) {
 TEST(WeightChoice, RefitNeverRaisesTheCost) {
   const auto colors = NoisyGradient(40000, 4);
   const auto blocks = WithPrice(*EncodeBlocks(colors, BlockLayout::kVariableRate, 12.0), WeightRatePrice(12.0, colors.size()));
-  std::vector<uint8_t> w(kMacroBlockColors);
+  std::vector<uint8_t> w(kMacroBlockColors), refit(kMacroBlockColors);
   size_t moved = 0;
   for (ColorBlock b : blocks) {
     const uint64_t before = ChooseBlockWeights(colors, b, w);
     const Endpoints ends = b.ends;
-    RefitEnds(colors, b);
+    RefitEnds(colors, b, refit);
     EXPECT_LE(ChooseBlockWeights(colors, b, w), before);
+    // The weights it leaves are those of the block it leaves.
+    EXPECT_TRUE(std::equal(w.begin(), w.begin() + b.length, refit.begin()));
     moved += !(b.ends == ends);
   }
   EXPECT_GT(moved, 0u);
@@ -113,6 +116,26 @@ TEST(WeightChoice, TargetsAreMetWithPricedWeights) {
     EXPECT_GE(psnr, target);
     EXPECT_LT(psnr, target + 0.5);
   }
+}
+
+// BlocksForTarget hands over the weights it measured its blocks with; they are the ones the writer
+// would choose: the stream is the same byte for byte, with and without spatial contexts.
+TEST(WeightChoice, TargetBlocksCarryTheWrittenWeights) {
+  const auto colors = NoisyGradient(3 * kMacroBlockColors + 123, 5);
+  std::vector<uint64_t> morton(colors.size());
+  for (size_t i = 0; i < morton.size(); ++i) morton[i] = 3 * i;
+  for (const BlockLayout layout : {BlockLayout::kVariableRate, BlockLayout::kFixedRate}) {
+    const auto found = BlocksForTarget(colors, {}, layout, 38.0);
+    ASSERT_TRUE(found.ok());
+    ASSERT_EQ(found->weights.size(), colors.size());
+    for (const std::span<const uint64_t> codes : {std::span<const uint64_t>(), std::span<const uint64_t>(morton)}) {
+      const auto chosen = SerializeBlocks(colors, found->blocks, layout, codes, nullptr, found->weights);
+      const auto again = SerializeBlocks(colors, found->blocks, layout, codes);
+      ASSERT_TRUE(chosen.ok() && again.ok());
+      EXPECT_EQ(*chosen, *again);
+    }
+  }
+  EXPECT_FALSE(SerializeBlocks(colors, {}, BlockLayout::kVariableRate, {}, nullptr, std::vector<uint8_t>(7)).ok());
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 
+#include "pointdag/read/memory_reader.h"
 #include "pointdag/read/pcl_reader.h"
+#include "pointdag/read/remembering_reader.h"
 #include "pointdag/read/scan_reader.h"
 #include "test_util.h"
 
@@ -489,6 +493,44 @@ TEST(PclReader, TruncatedBinaryPcdIsAnError) {
                     "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 100\nDATA binary\n" + std::string(40, '\0');
   WriteText(dir / "cut.pcd", bin);
   EXPECT_FALSE(OpenScan(dir / "cut.pcd").ok());
+}
+
+// Every pass (partial first pass, rewinds mid-scan, whole passes) gives the wrapped reader's points
+// in order, whether the scan fits in memory or outgrows it part way.
+TEST(RememberingReader, PassesGiveTheSamePointsAsTheWrappedReader) {
+  std::vector<std::array<double, 3>> xyz;
+  std::vector<std::array<uint16_t, 3>> rgb;
+  for (int i = 0; i < 1000; ++i) {
+    xyz.push_back({i * 0.5, -i * 1.0, i * 0.25});
+    rgb.push_back({static_cast<uint16_t>(i), static_cast<uint16_t>(2 * i), static_cast<uint16_t>(3 * i)});
+  }
+  const auto pass = [](ScanReader& reader, size_t batch_points, size_t stop_after) {
+    PointBatch all, batch;
+    for (;;) {
+      auto n = reader.Read(batch, batch_points);
+      EXPECT_TRUE(n.ok());
+      if (!n.ok() || *n == 0) break;
+      EXPECT_EQ(batch.size(), *n);
+      all.xyz.insert(all.xyz.end(), batch.xyz.begin(), batch.xyz.end());
+      all.rgb.insert(all.rgb.end(), batch.rgb.begin(), batch.rgb.end());
+      if (all.size() >= stop_after) break;
+    }
+    EXPECT_TRUE(reader.Rewind().ok());
+    return all;
+  };
+  for (const uint64_t limit : {uint64_t{10000}, uint64_t{1000}, uint64_t{700}, uint64_t{0}}) {
+    RememberingReader reader(std::make_unique<MemoryScanReader>(xyz, rgb), limit);
+    const PointBatch sample = pass(reader, 300, 300);
+    ASSERT_EQ(sample.size(), 300u);
+    EXPECT_TRUE(std::equal(sample.xyz.begin(), sample.xyz.end(), xyz.begin()));
+    for (const size_t batch_points : {size_t{256}, size_t{77}, size_t{4096}}) {
+      const PointBatch whole = pass(reader, batch_points, SIZE_MAX);
+      EXPECT_EQ(whole.xyz, xyz) << limit;
+      EXPECT_EQ(whole.rgb, rgb) << limit;
+      EXPECT_EQ(reader.max_color_seen(), 2997);
+      EXPECT_EQ(reader.info().point_count, 1000u);
+    }
+  }
 }
 
 }  // namespace

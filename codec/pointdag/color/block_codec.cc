@@ -278,18 +278,19 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
 
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout, std::span<const uint64_t> morton,
-                                               std::vector<Rgb8>* decoded) {
+                                               std::vector<Rgb8>* decoded, std::span<const uint8_t> weights) {
   return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kFirstSpatialVersion - 1 : kBlockStreamVersion,
-                                  morton, decoded);
+                                  morton, decoded, weights);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                         BlockLayout layout, uint8_t version, std::span<const uint64_t> morton,
-                                                        std::vector<Rgb8>* decoded) {
+                                                        std::vector<Rgb8>* decoded, std::span<const uint8_t> chosen) {
   if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
   if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
     return InvalidArgument("color stream version " + std::to_string(version) + " needs one Morton code per color");
   }
+  if (!chosen.empty() && chosen.size() != colors.size()) return InvalidArgument("chosen weights must be one per color");
   const DifferenceCode code{version >= 2};
   const bool mixed = version >= kFirstMixedVersion;
   std::optional<WeightContexts> spatial;
@@ -335,10 +336,15 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
       if (b.bits) encode_difference(models->b[b.bits], span[0], span[1], span[2]);
     }
     if (b.bits) {
-      ChooseBlockWeights(colors, b, weights);
+      std::span<const uint8_t> block_weights = weights;
+      if (chosen.empty()) {
+        ChooseBlockWeights(colors, b, weights);
+      } else {
+        block_weights = chosen.subspan(b.start, b.length);
+      }
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
-        const uint32_t w = weights[i - b.start];
+        const uint32_t w = block_weights[i - b.start];
         if (mixed) {
           mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits, true), prev_w}, w);
         } else {

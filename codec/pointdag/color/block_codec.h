@@ -66,9 +66,11 @@ StatusOr<gpu::VulkanContext*> ColorBlocksDevice();
 // endpoint A a prediction from the decoded neighbours (stream version 4), else empty (version 2).
 // `decoded`, when given, receives the colors the stream decodes to (BlockColorDecoder's, the writer
 // rebuilds them as it goes), so that an encoder measures them without decoding the stream again.
+// `weights`, when given (one per color), are ChooseBlockWeights' weights of every block, already
+// chosen (TargetBlocks::weights); else the writer chooses them.
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout, std::span<const uint64_t> morton = {},
-                                               std::vector<Rgb8>* decoded = nullptr);
+                                               std::vector<Rgb8>* decoded = nullptr, std::span<const uint8_t> weights = {});
 
 // Resident form for random access and batch decoding.
 class BlockColorDecoder {

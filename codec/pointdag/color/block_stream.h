@@ -79,6 +79,7 @@ inline std::array<int, 3> PredictA(const BlockSurroundings& s, const std::array<
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                         BlockLayout layout, uint8_t version,
                                                         std::span<const uint64_t> morton = {},
-                                                        std::vector<Rgb8>* decoded = nullptr);
+                                                        std::vector<Rgb8>* decoded = nullptr,
+                                                        std::span<const uint8_t> weights = {});
 
 }  // namespace pointdag

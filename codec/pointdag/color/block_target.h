@@ -22,6 +22,7 @@ namespace pointdag {
 
 struct TargetBlocks {
   std::vector<ColorBlock> blocks;  // sorted, covering every color, never across macro blocks
+  std::vector<uint8_t> weights;    // every color's weight in its block, as ChooseBlockWeights picks it
   double max_mse = 0;              // the units' thresholds' geometric mean, by colors (exact units left out)
   double encodes = 0;              // colors encoded, in units of the whole array (the cost)
 };

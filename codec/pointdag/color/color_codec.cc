@@ -31,9 +31,10 @@ BlockLayout LayoutOf(ColorCodec codec) {
 // that decode (Open's entropy decode with its weight contexts) was 12 % of a lion encode at 38 dB.
 StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
                                           std::span<const uint64_t> judged, ColorCodec codec,
-                                          std::span<const ColorBlock> blocks, double max_mse) {
+                                          std::span<const ColorBlock> blocks, double max_mse,
+                                          std::span<const uint8_t> weights = {}) {
   std::vector<Rgb8> decoded;
-  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec), morton, &decoded));
+  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec), morton, &decoded, weights));
   EncodedColors out;
   out.codec = codec;
   out.max_mse = max_mse;
@@ -57,7 +58,7 @@ StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std:
                                               std::span<const uint64_t> judged, ColorCodec codec,
                                               double target, std::optional<double> hint) {
   ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target, hint));
-  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, morton, judged, codec, found.blocks, found.max_mse));
+  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, morton, judged, codec, found.blocks, found.max_mse, found.weights));
   out.encodes = found.encodes;
   if (out.psnr.y >= target) return out;
   ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, morton, judged, codec, 0));

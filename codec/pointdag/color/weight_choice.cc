@@ -82,10 +82,12 @@ uint64_t ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, s
 
 // Least squares for fixed weights t = w / m: A and B minimize the summed squared error of
 // (1 - t) A + t B in any metric (Q factors out of the normal equations), per channel a 2x2 system.
-void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b) {
-  if (b.bits == 0 || b.rate_price == 0 || b.length < 3) return;
-  thread_local std::vector<uint8_t> w;
-  w.resize(b.length);
+void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b, std::span<uint8_t> weights) {
+  if (b.bits == 0 || b.rate_price == 0 || b.length < 3) {
+    ChooseBlockWeights(colors, b, weights);
+    return;
+  }
+  const std::span<uint8_t> w = weights.first(b.length);
   const uint64_t before = ChooseBlockWeights(colors, b, w);
   const double m = (1 << b.bits) - 1;
   double aa = 0, ab = 0, bb = 0, x[3] = {}, y[3] = {};
@@ -105,7 +107,13 @@ void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b) {
   }
   ColorBlock trial = b;
   trial.ends = {{na[0], na[1], na[2]}, {nb[0], nb[1], nb[2]}};
-  if (trial.ends != b.ends && ChooseBlockWeights(colors, trial, w) < before) b.ends = trial.ends;
+  if (trial.ends == b.ends) return;
+  thread_local std::vector<uint8_t> trial_weights;
+  trial_weights.resize(b.length);
+  if (ChooseBlockWeights(colors, trial, trial_weights) < before) {
+    b.ends = trial.ends;
+    std::copy(trial_weights.begin(), trial_weights.end(), w.begin());
+  }
 }
 
 }  // namespace pointdag

@@ -35,6 +35,8 @@ uint64_t ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, s
 // The fitter placed b's endpoints for the error-minimizing weights (and kept unrefined ones where
 // they passed well: block_fit.h); for a priced block, fits them again by least squares for the
 // weights ChooseBlockWeights picks and keeps them where that lowers its cost. A priced block only.
-void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b);
+// `weights` (b.length of them) ends with ChooseBlockWeights' weights for b as it leaves, so that
+// callers measuring or writing the block need not choose them again.
+void RefitEnds(std::span<const Rgb8> colors, ColorBlock& b, std::span<uint8_t> weights);
 
 }  // namespace pointdag
