@@ -165,7 +165,7 @@ void WriteSymbols(const DagArrays& a, Sink& sink, int depth) {
     size_t child = 0;
     for (const uint8_t mask : a.masks[level]) {
       sink.Mask(cls, mask);
-      for (int i = std::popcount(static_cast<unsigned>(mask)); i > 0; --i) {
+      for (int i = kByteBits[mask]; i > 0; --i) {
         const uint32_t k = a.children[level][child++];
         if (seen > 0) sink.Flag(cls, k < seen);
         if (k < seen) {
@@ -199,7 +199,7 @@ StatusOr<DagArrays> ReadSymbols(Source& source, int depth, const std::vector<uin
       const uint8_t mask = source.Mask(cls);
       if (mask == 0 || source.failed()) return Corrupt("geometry stream holds an empty or missing node mask");
       a.masks[level].push_back(mask);
-      for (int c = std::popcount(static_cast<unsigned>(mask)); c > 0; --c) {
+      for (int c = kByteBits[mask]; c > 0; --c) {
         uint32_t k;
         if (seen > 0 && source.Flag(cls)) {
           k = source.Ref(cls, seen);
