@@ -192,6 +192,13 @@ StatusOr<DagArrays> ReadSymbols(Source& source, int depth, const std::vector<uin
   DagArrays a;
   a.masks.resize(levels);
   a.children.resize(levels);  // child ordinals, level by level
+  // The declared counts are within the caller's max_nodes (and, for coders 1 and 3, what the payload
+  // can hold: DecodeDag checked both), so reserving them stays within the decoder's bound.
+  for (int level = 0; level < levels; ++level) {
+    a.masks[level].reserve(counts[level]);
+    a.children[level].reserve(counts[level + 1]);
+  }
+  a.leaves.reserve(counts[levels]);
   for (int level = 0; level < levels; ++level) {
     const int cls = depth - level;
     uint32_t seen = 0;
@@ -217,11 +224,10 @@ StatusOr<DagArrays> ReadSymbols(Source& source, int depth, const std::vector<uin
     const uint8_t cells = source.Mask(kBrickCellClass);
     if (cells == 0) return Corrupt("geometry stream holds an empty brick");
     uint64_t brick = 0;
-    for (int c = 0; c < 8; ++c) {
-      if (!((cells >> c) & 1u)) continue;
+    for (unsigned rest = cells; rest; rest &= rest - 1) {
       const uint8_t voxels = source.Mask(kVoxelClass);
       if (voxels == 0) return Corrupt("geometry stream holds an empty brick cell");
-      brick |= uint64_t{voxels} << (8 * c);
+      brick |= uint64_t{voxels} << (8 * __builtin_ctz(rest));
     }
     a.leaves.push_back(brick);
   }
