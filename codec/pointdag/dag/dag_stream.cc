@@ -6,6 +6,7 @@
 #include <bit>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <unordered_set>
 
 #include "pointdag/dag/dag_arrays.h"
@@ -192,13 +193,15 @@ StatusOr<DagArrays> ReadSymbols(Source& source, int depth, const std::vector<uin
   DagArrays a;
   a.masks.resize(levels);
   a.children.resize(levels);  // child ordinals, level by level
-  // The declared counts are within the caller's max_nodes (and, for coders 1 and 3, what the payload
-  // can hold: DecodeDag checked both), so reserving them stays within the decoder's bound.
-  for (int level = 0; level < levels; ++level) {
-    a.masks[level].reserve(counts[level]);
-    a.children[level].reserve(counts[level + 1]);
+  // Coders 1 and 3: DecodeDag checked that the payload can hold the declared counts, so reserving
+  // them allocates in proportion to the input. Coder 0's counts are bounded only by its header.
+  if constexpr (!std::is_same_v<Source, ZstdSource>) {
+    for (int level = 0; level < levels; ++level) {
+      a.masks[level].reserve(counts[level]);
+      a.children[level].reserve(counts[level + 1]);
+    }
+    a.leaves.reserve(counts[levels]);
   }
-  a.leaves.reserve(counts[levels]);
   for (int level = 0; level < levels; ++level) {
     const int cls = depth - level;
     uint32_t seen = 0;
