@@ -1,6 +1,8 @@
 // The stored DAG stream alone (all four coders: the second byte picks one), as DecodePdag runs it for a
 // tile: nodes bounded as for a 2^24-voxel tile. A stream that decodes must re-encode to a stream
-// that decodes to the same DAG (or, for coder 2, be refused as storing a brick twice).
+// that decodes to the same DAG (or, for coder 2, be refused as storing a brick twice). EncodeDag
+// validates first, so a decoded DAG that Validate rejects aborts too: DecodeDag no longer runs
+// Validate after coders 0, 1 and 3, whose arrays are valid by construction.
 #include <cstdint>
 #include <cstdlib>
 #include <span>

@@ -34,7 +34,19 @@ void DecodeRun(const Endpoints& ends, const uint64_t* words, uint64_t bit_offset
   }
   std::array<Rgb8, kColors> palette;
   for (uint32_t w = 0; w < kColors; ++w) palette[w] = Interpolate(ends, w, kBits);
-  for (uint64_t i = 0; i < n; ++i, bit_offset += kBits) out[i] = palette[PackedWeight(words, bit_offset, kBits)];
+  uint64_t i = 0;
+  if constexpr (64 % kBits == 0) {
+    // Whole words of weights, each loaded once (a width that divides 64 never straddles them once
+    // the offset is word-aligned).
+    for (; i < n && (bit_offset & 63); ++i, bit_offset += kBits) out[i] = palette[PackedWeight(words, bit_offset, kBits)];
+    constexpr uint64_t kPerWord = 64 / kBits;
+    for (; i + kPerWord <= n; i += kPerWord, bit_offset += 64) {
+      const uint64_t word = words[bit_offset >> 6];
+#pragma GCC unroll 64
+      for (uint64_t j = 0; j < kPerWord; ++j) out[i + j] = palette[(word >> (j * kBits)) & (kColors - 1)];
+    }
+  }
+  for (; i < n; ++i, bit_offset += kBits) out[i] = palette[PackedWeight(words, bit_offset, kBits)];
 }
 
 // Weights with the previous weight as their only context (versions 1 and 2, and mipmapped
@@ -44,16 +56,26 @@ template <int kBits>
 void DecodePlainWeights(BinaryRangeDecoder& rc, std::span<BitTreeModel<kMaxWeightBits>> models, uint32_t length,
                         uint64_t* words, uint64_t bit_offset) {
   uint32_t prev = 16;
-  for (uint32_t i = 0; i < length; ++i, bit_offset += kBits) {
+  // The word being filled stays in a register: one store per 64 bits.
+  uint64_t* word = words + (bit_offset >> 6);
+  unsigned used = bit_offset & 63;
+  uint64_t pending = *word;  // the bits below `used` are earlier blocks'
+  for (uint32_t i = 0; i < length; ++i) {
     BitTreeModel<kMaxWeightBits>& m = models[prev];
     uint32_t node = 1;
 #pragma GCC unroll 4
     for (int b = 0; b < kBits; ++b) node = node << 1 | static_cast<uint32_t>(rc.Decode(m.node[node]));
     const uint32_t w = node - (1u << kBits);
-    words[bit_offset >> 6] |= uint64_t{w} << (bit_offset & 63);
-    if ((bit_offset & 63) + kBits > 64) words[(bit_offset >> 6) + 1] |= uint64_t{w} >> (64 - (bit_offset & 63));
+    pending |= uint64_t{w} << used;
+    used += kBits;
+    if (used >= 64) {
+      *word++ = pending;
+      used -= 64;
+      pending = used ? uint64_t{w} >> (kBits - used) : 0;
+    }
     prev = w;
   }
+  *word = pending;
 }
 
 }  // namespace

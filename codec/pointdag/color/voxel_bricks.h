@@ -5,10 +5,11 @@
 // bisection over the sorted bricks cost the weight contexts twice the instructions).
 #pragma once
 
-#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include "pointdag/bit_count.h"
 
 namespace pointdag {
 
@@ -18,19 +19,7 @@ struct VoxelBrick {
   uint64_t cells;  // bit (Morton code & 63) per voxel
 
   // The index of the voxel in `cell` (0..63, one of `cells`).
-  uint32_t IndexOf(int cell) const { return first + CountBits(cells & ((uint64_t{1} << cell) - 1)); }
-
-  // std::popcount is a libgcc call on baseline x86-64 (no POPCNT): the same count inline.
-  static uint32_t CountBits(uint64_t v) {
-#if defined(__POPCNT__) || !defined(__x86_64__)
-    return static_cast<uint32_t>(std::popcount(v));
-#else
-    v -= (v >> 1) & 0x5555555555555555ull;
-    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
-    v = (v + (v >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-    return static_cast<uint32_t>((v * 0x0101010101010101ull) >> 56);
-#endif
-  }
+  uint32_t IndexOf(int cell) const { return first + CountBits64(cells & ((uint64_t{1} << cell) - 1)); }
 };
 
 class VoxelBricks {

@@ -1,12 +1,12 @@
 #include "pointdag/dag/dag_arrays.h"
 
-#include <bit>
+#include "pointdag/bit_count.h"
 
 namespace pointdag {
 namespace {
 
 size_t RecordSize(const Svdag& dag, size_t word) {
-  return 1 + static_cast<size_t>(std::popcount(static_cast<unsigned>(dag.Mask(static_cast<uint32_t>(word)))));
+  return 1 + static_cast<size_t>(kByteBits[dag.Mask(static_cast<uint32_t>(word))]);
 }
 
 }  // namespace
@@ -30,7 +30,7 @@ StatusOr<DagArrays> ToArrays(const Svdag& dag) {
     const bool children_are_leaves = level + 1 == levels;
     uint32_t seen = 0;  // nodes of the next level referenced so far
     for (size_t w = dag.level_offsets[level]; w < dag.level_offsets[level + 1]; w += RecordSize(dag, w)) {
-      for (int i = 0; i < std::popcount(static_cast<unsigned>(dag.Mask(static_cast<uint32_t>(w)))); ++i) {
+      for (int i = 0; i < kByteBits[dag.Mask(static_cast<uint32_t>(w))]; ++i) {
         const uint32_t ref = dag.nodes[w + 1 + i];
         const uint32_t k = children_are_leaves ? ref : ordinal[ref];
         if (k > seen) return Internal("DAG is not in canonical breadth-first order");
@@ -57,7 +57,7 @@ StatusOr<Svdag> FromArrays(const DagArrays& a, int depth, CountMode mode) {
     size_t child = 0;
     for (size_t i = 0; i < a.masks[level].size(); ++i) {
       uint64_t sum = mode == CountMode::kMipmap ? 1 : 0;
-      for (int c = std::popcount(static_cast<unsigned>(a.masks[level][i])); c > 0; --c, ++child) {
+      for (int c = kByteBits[a.masks[level][i]]; c > 0; --c, ++child) {
         const uint32_t k = a.children[level][child];
         if (level + 1 == levels) {
           sum += mode == CountMode::kMipmap ? BrickMipCount(dag.leaves[k]) : BrickVoxelCount(dag.leaves[k]);
@@ -74,7 +74,7 @@ StatusOr<Svdag> FromArrays(const DagArrays& a, int depth, CountMode mode) {
     dag.level_offsets.push_back(static_cast<uint32_t>(word));
     for (uint8_t mask : a.masks[level]) {
       address[level].push_back(static_cast<uint32_t>(word));
-      word += 1 + static_cast<uint64_t>(std::popcount(static_cast<unsigned>(mask)));
+      word += 1 + static_cast<uint64_t>(kByteBits[mask]);
       if (word > 0xFFFFFFFFull) return ResourceLimit("decoded DAG exceeds 2^32 node words");
     }
   }
@@ -92,7 +92,7 @@ StatusOr<Svdag> FromArrays(const DagArrays& a, int depth, CountMode mode) {
         field = static_cast<uint32_t>(count[level][i]);
       }
       dag.nodes.push_back(uint32_t{a.masks[level][i]} << 24 | field);
-      for (int c = std::popcount(static_cast<unsigned>(a.masks[level][i])); c > 0; --c, ++child) {
+      for (int c = kByteBits[a.masks[level][i]]; c > 0; --c, ++child) {
         const uint32_t k = a.children[level][child];
         dag.nodes.push_back(level + 1 == levels ? k : address[level + 1][k]);
       }

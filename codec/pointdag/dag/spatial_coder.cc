@@ -179,7 +179,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
         if (level > levels) slots[id >> 3] |= uint64_t{mask} << (8 * (id & 7));
       }
       if (level >= levels) continue;
-      const int n = kBits[mask];
+      const int n = kByteBits[mask];
       if (level + 1 == levels) {  // brick slots
         cur.kids[i] = static_cast<uint32_t>(child);
         child += static_cast<size_t>(n);

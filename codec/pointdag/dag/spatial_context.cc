@@ -8,7 +8,7 @@ Level Expand(const Level& cur, int level, int levels, const DagArrays& a, bool p
   for (size_t i = 0; i < cur.size(); ++i) {
     if (level >= levels || cur.first[i]) {
       base[i] = total;
-      total += kBits[cur.mask[i]];
+      total += kByteBits[cur.mask[i]];
     }
   }
   Level next;

@@ -12,6 +12,7 @@
 #include <new>
 #include <vector>
 
+#include "pointdag/bit_count.h"
 #include "pointdag/dag/dag_arrays.h"
 
 namespace pointdag {
@@ -39,14 +40,7 @@ struct Level {
 // cell from there on), with their neighbours (and with `positions`, their coordinates).
 Level Expand(const Level& cur, int level, int levels, const DagArrays& a, bool positions);
 
-// Set bits of a byte: the build has no popcount instruction to rely on, and this is the inner loop.
-constexpr std::array<uint8_t, 256> kBits = [] {
-  std::array<uint8_t, 256> t{};
-  for (int i = 0; i < 256; ++i) t[i] = static_cast<uint8_t>(std::popcount(static_cast<unsigned>(i)));
-  return t;
-}();
-
-inline int Rank(unsigned mask, int bit) { return kBits[mask & ((1u << bit) - 1)]; }
+inline int Rank(unsigned mask, int bit) { return kByteBits[mask & ((1u << bit) - 1)]; }
 
 // The context's parts as tables (the same arithmetic as PDAG_FORMAT §2.2 states it, per bit):
 // kSides[upper_exists << 3 | lower_exists][c]: per axis 2 = the parent's neighbour on the child's

@@ -28,16 +28,6 @@ uint64_t BrickMipRank(uint64_t brick, uint32_t cell, int voxel_bit) {
   return rank;
 }
 
-}  // namespace
-
-uint64_t BrickMipCount(uint64_t brick) {
-  uint64_t count = 1 + BrickVoxelCount(brick);
-  for (int c = 0; c < 8; ++c) count += ((brick >> (8 * c)) & 0xFFu) ? 1 : 0;
-  return count;
-}
-
-namespace {
-
 // Count of the node referenced by `ref` on `level`, whatever kind of node that level holds.
 uint64_t RefCount(const Svdag& dag, uint32_t ref, int level) {
   if (level == dag.depth - 2) {
@@ -91,13 +81,9 @@ void VisitVoxels(const Svdag& dag, uint32_t ref, int level, uint64_t prefix, Vis
     }
     return;
   }
-  const uint32_t mask = dag.Mask(ref);
-  int rank = 0;
-  for (uint32_t octant = 0; octant < 8; ++octant) {
-    if ((mask >> octant) & 1u) {
-      VisitVoxels(dag, dag.nodes[ref + 1 + rank], level + 1, prefix << 3 | octant, visit);
-      ++rank;
-    }
+  const uint32_t* child = &dag.nodes[ref + 1];
+  for (uint32_t mask = dag.Mask(ref); mask; mask &= mask - 1, ++child) {
+    VisitVoxels(dag, *child, level + 1, prefix << 3 | static_cast<uint64_t>(__builtin_ctz(mask)), visit);
   }
 }
 

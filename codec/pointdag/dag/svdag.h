@@ -22,6 +22,7 @@
 #include <optional>
 #include <vector>
 
+#include "pointdag/bit_count.h"
 #include "pointdag/status.h"
 
 namespace pointdag {
@@ -74,9 +75,14 @@ struct Svdag {
   Status Validate() const;
 };
 
-// Mipmap-mode count of a 4x4x4 brick: itself, its occupied 2x2x2 cells, and its voxels.
-uint64_t BrickMipCount(uint64_t brick);
 // Leaf-mode count of a brick: its voxels.
-inline uint64_t BrickVoxelCount(uint64_t brick) { return static_cast<uint64_t>(__builtin_popcountll(brick)); }
+inline uint64_t BrickVoxelCount(uint64_t brick) { return CountBits64(brick); }
+// Mipmap-mode count of a 4x4x4 brick: itself, its occupied 2x2x2 cells (bytes), and its voxels.
+inline uint64_t BrickMipCount(uint64_t brick) {
+  uint64_t any = brick | brick >> 4;  // bit 0 of each byte ends as the OR of that byte's bits
+  any |= any >> 2;
+  any |= any >> 1;
+  return 1 + CountBits64(any & 0x0101010101010101ull) + BrickVoxelCount(brick);
+}
 
 }  // namespace pointdag

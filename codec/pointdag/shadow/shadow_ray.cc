@@ -80,7 +80,7 @@ void ShadowRayCaster::FindOwnBrick(const std::array<uint32_t, 3>& voxel) {
   for (int level = 0; level < dag_.depth - 2; ++level) {
     const int shift = dag_.depth - 1 - level;
     const uint32_t octant = ((voxel[0] >> shift) & 1u) << 2 | ((voxel[1] >> shift) & 1u) << 1 | ((voxel[2] >> shift) & 1u);
-    ref = dag_.nodes[ref + 1 + kBits[dag_.Mask(ref) & ((1u << octant) - 1)]];
+    ref = dag_.nodes[ref + 1 + kByteBits[dag_.Mask(ref) & ((1u << octant) - 1)]];
   }
   own_lo_ = lo;
   own_ref_ = ref;
@@ -109,7 +109,7 @@ bool ShadowRayCaster::Blocked(const std::array<uint32_t, 3>& voxel) {
     for (int i = 7; i >= 0; --i) {
       const uint32_t octant = static_cast<uint32_t>(i) ^ flip_;
       if (!((mask >> octant) & 1u) || !slabs.Reach(octant)) continue;
-      const uint32_t rank = kBits[mask & ((1u << octant) - 1)];
+      const uint32_t rank = kByteBits[mask & ((1u << octant) - 1)];
       stack_[top++] = {dag_.nodes[e.ref + 1 + rank], e.level + 1, ChildCorner(e.lo, octant, half)};
     }
   }
