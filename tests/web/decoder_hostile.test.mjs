@@ -52,6 +52,23 @@ function prng(seed) {
   };
 }
 
+// Every cut of a DAG stream, and 400 single-bit flips of it, end in a PdagError or a valid DAG; the
+// cuts `refused(length)` names must not decode.
+function cutsAndFlipsFailCleanly(stream, flipSeed, refused) {
+  const decode = (b) => decodeDag(b, 2 ** 32);
+  for (let length = 0; length < stream.length; ++length) {
+    const cut = outcome(decode, stream.subarray(0, length), `cut at ${length}`);
+    if (refused(length)) assert.notEqual(cut.code, 'ok', `cut at ${length}`);
+  }
+  const next = prng(flipSeed);
+  for (let trial = 0; trial < 400; ++trial) {
+    const flipped = stream.slice();
+    const at = next(flipped.length);
+    flipped[at] ^= 1 << next(8);
+    outcome(decode, flipped, `bit flip ${trial} at ${at}`);
+  }
+}
+
 describe('hostile tiles', () => {
   let tile, wasm, reference;
   // Both decoders on the bytes; they must agree. Returns the JavaScript outcome.
@@ -231,36 +248,15 @@ describe('geometry stream versions', () => {
       assert.equal(stream[1], 3);
       assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
     }
-    const stream = seed('leaves_table.bin');
-    for (let length = 0; length < stream.length; ++length) {
-      const cut = outcome((b) => decodeDag(b, 2 ** 32), stream.subarray(0, length), `cut at ${length}`);
-      assert.notEqual(cut.code, 'ok', `cut at ${length}`);
-    }
-    const next = prng(6);
-    for (let trial = 0; trial < 400; ++trial) {
-      const flipped = stream.slice();
-      const at = next(flipped.length);
-      flipped[at] ^= 1 << next(8);
-      outcome((b) => decodeDag(b, 2 ** 32), flipped, `bit flip ${trial} at ${at}`);
-    }
+    cutsAndFlipsFailCleanly(seed('leaves_table.bin'), 6, () => true);
   });
   // Version 5 merges the slots it decodes: a cut or flipped stream must still end in a PdagError or
   // in some valid DAG, never in an exception of another kind.
   test('version 5 cut or flipped fails cleanly', () => {
     const stream = seed('leaves_spatial_v5.bin');
-    for (let length = 0; length < stream.length; ++length) {
-      const cut = outcome((b) => decodeDag(b, 2 ** 32), stream.subarray(0, length), `cut at ${length}`);
-      // The range decoder reads up to 4 missing bytes as zeros (every version: the container's CRC
-      // catches such a cut), so only a cut of 5 bytes or more must be refused.
-      if (length + 5 <= stream.length) assert.notEqual(cut.code, 'ok', `cut at ${length}`);
-    }
-    const next = prng(5);
-    for (let trial = 0; trial < 400; ++trial) {
-      const flipped = stream.slice();
-      const at = next(flipped.length);
-      flipped[at] ^= 1 << next(8);
-      outcome((b) => decodeDag(b, 2 ** 32), flipped, `bit flip ${trial} at ${at}`);
-    }
+    // The range decoder reads up to 4 missing bytes as zeros (every version: the container's CRC
+    // catches such a cut), so only a cut of 5 bytes or more must be refused.
+    cutsAndFlipsFailCleanly(stream, 5, (length) => length + 5 <= stream.length);
   });
 });
 
