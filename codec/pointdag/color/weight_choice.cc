@@ -23,18 +23,20 @@ constexpr std::array<std::array<uint8_t, 16>, kMaxWeightBits + 1> kDistanceCost 
 }};
 
 // A priced block of kBits per weight: the Viterbi search below, the width a constant so that the
-// palette and the error-minimizing weights divide by constants.
+// palette divides by a constant. `ends` by value: the stores to `out` may not alias it, so that its
+// axis is computed once, not once per color.
 template <int kBits>
-uint64_t ChooseWeights(std::span<const Rgb8> block, const Endpoints& ends, uint32_t price, std::span<uint8_t> out) {
+uint64_t ChooseWeights(std::span<const Rgb8> block, const Endpoints ends, uint32_t price, std::span<uint8_t> out) {
   constexpr int kTop = (1 << kBits) - 1;
   for (size_t i = 0; i < block.size(); ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, kBits));
   // Viterbi over each color's error-minimizing weight and its two neighbours (wider choices moved
-  // nothing on lion, guanyin and autzen). The first weight of a block costs the same whatever it is.
+  // nothing on lion, guanyin and autzen).
   std::array<Rgb8, kTop + 1> palette;
   for (int w = 0; w <= kTop; ++w) palette[w] = Interpolate(ends, static_cast<uint32_t>(w), kBits);
-  // The price of a step by each distance; one beyond kTop for the moves from a choice outside 0..kTop.
-  std::array<uint64_t, kTop + 2> step_cost{};
-  for (int d = 0; d <= kTop + 1; ++d) step_cost[d] = uint64_t{price} * kDistanceCost[kBits][std::min(d, kTop)];
+  // The price of a step from the previous weight to this one, by their difference d + kTop + 2 (d
+  // within -kTop - 2..kTop + 2: a choice outside 0..kTop is one beyond, and costs kFar anyway).
+  std::array<uint64_t, 2 * kTop + 5> step_cost{};
+  for (int d = -kTop - 2; d <= kTop + 2; ++d) step_cost[d + kTop + 2] = uint64_t{price} * kDistanceCost[kBits][std::min(std::abs(d), kTop)];
   // A choice outside 0..kTop costs kFar: above any real cost (under 2^52), so never the least.
   constexpr uint64_t kFar = uint64_t{1} << 62;
   // Per color, each choice's best previous choice (2 bits each), reused across calls: no allocation per block.
@@ -43,10 +45,10 @@ uint64_t ChooseWeights(std::span<const Rgb8> block, const Endpoints& ends, uint3
   std::array<uint64_t, 3> cost{}, next{};
   for (size_t i = 0; i < block.size(); ++i) {
     const int lowest = out[i] - 1;  // choice s is weight lowest + s
-    // Moving from choice t of the previous color to choice s is a step of delta + s - t.
-    const int delta = i > 0 ? out[i] - out[i - 1] : 0;
-    std::array<uint64_t, 5> move{};  // by s - t + 2
-    for (int k = 0; k < 5 && i > 0; ++k) move[k] = step_cost[static_cast<size_t>(std::abs(delta + k - 2))];
+    // Choice t of the previous color to choice s is a step of (out[i] - out[i - 1]) + s - t: the
+    // costs of s - t = -2..2 from move[0]. The first weight costs the same whatever it is.
+    static constexpr std::array<uint64_t, 5> kFirst{};
+    const uint64_t* move = i > 0 ? &step_cost[static_cast<size_t>(out[i] - out[i - 1] + kTop)] : kFirst.data();
     uint8_t links = 0;
     for (int s = 0; s < 3; ++s) {
       const int w = lowest + s;

@@ -152,31 +152,29 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
-template <typename Table, typename F>
-void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
+template <bool kBelowOnly, typename Table>
+uint64_t WeightContexts::PrecedingSum(const Table& table, const Cursor& cursor, uint64_t i, uint64_t below) const {
   const auto& cell = table[morton_[i] & 63];
+  uint64_t sum = 0;
   for (size_t g = 0; g < cell.count; ++g) {
     const NeighbourGroup& group = cell.group[g];
     const VoxelBrick& near = cursor.near[group.slot];
+    uint64_t colors = 0;  // the group's, weighed once
     for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
-      f(size_t{near.IndexOf(std::countr_zero(present))}, group.weight);
+      const uint32_t j = near.IndexOf(std::countr_zero(present));
+      if (!kBelowOnly || j < below) colors += decoded_[j];
     }
+    sum += group.weight * colors;
   }
+  return sum;
 }
 
 NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, int bits, bool far) {
   Seek(weights_, i);
-  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
-  const auto add = [&](size_t j, int64_t weight) {
-    const Rgb8 c = decoded_[j];
-    r += weight * c.r;
-    g += weight * c.g;
-    b += weight * c.b;
-    total += weight;
-  };
-  ForEachPreceding(kNeighbours, weights_, i, add);
-  const bool beyond = total == 0 && far;
-  if (beyond) ForEachPreceding(kFarNeighbours, weights_, i, add);
+  uint64_t sum = PrecedingSum<false>(kNeighbours, weights_, i, i);  // the neighbours' colors, weighted
+  const bool beyond = sum == 0 && far;
+  if (beyond) sum = PrecedingSum<false>(kFarNeighbours, weights_, i, i);
+  const int64_t total = static_cast<int64_t>(sum >> 48), r = sum & 0xFFFF, g = sum >> 16 & 0xFFFF, b = sum >> 32 & 0xFFFF;
   if (total == 0) return {};
   // Their mean's position on the segment A -> B in weight (half) steps, rounded, clamped to 0..m
   // (0..2m; 0 where A = B): one division per weight, not one per neighbour.
@@ -185,9 +183,13 @@ NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, in
   const int64_t len2 = sr * sr + sg * sg + sb * sb;
   const int64_t dot = (r - total * ends.a.r) * sr + (g - total * ends.a.g) * sg + (b - total * ends.a.b) * sb;
   if (dot <= 0 || len2 == 0) return {true, beyond, 0, 0};
-  const int64_t unit = 2 * total * len2;
-  return {true, beyond, static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / unit)),
-          static_cast<uint32_t>(std::min(2 * m, (4 * dot * m + total * len2) / unit))};
+  // In 32 bits, whose division is the cheaper: dot and len2 are at most total x 3 x 255^2 and 3 x
+  // 255^2 (each neighbour's (c - A).(B - A) by Cauchy-Schwarz), total at most 124, so 4 dot m +
+  // total len2 <= 61 x 124 x 195075 < 2^31.
+  const auto unit = static_cast<uint32_t>(2 * total * len2), half = static_cast<uint32_t>(total * len2);
+  const auto scaled = static_cast<uint32_t>(dot * m);
+  return {true, beyond, std::min(static_cast<uint32_t>(m), (2 * scaled + half) / unit),
+          std::min(static_cast<uint32_t>(2 * m), (4 * scaled + half) / unit)};
 }
 
 BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) {
@@ -195,14 +197,11 @@ BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) 
   const uint64_t stop = start + std::min(length, kPredictingVoxels);
   for (uint64_t i = start; i < stop; ++i) {
     Seek(ends_, i);
-    ForEachPreceding(kNeighbours, ends_, i, [&](size_t j, int64_t weight) {
-      if (j >= start) return;  // inside the block: not decoded yet
-      const Rgb8 c = decoded_[j];
-      s.r += weight * c.r;
-      s.g += weight * c.g;
-      s.b += weight * c.b;
-      s.weight += weight;
-    });
+    const uint64_t sum = PrecedingSum<true>(kNeighbours, ends_, i, start);  // inside the block: not decoded yet
+    s.r += sum & 0xFFFF;
+    s.g += sum >> 16 & 0xFFFF;
+    s.b += sum >> 32 & 0xFFFF;
+    s.weight += sum >> 48;
   }
   return s;
 }

@@ -73,7 +73,7 @@ class WeightContexts {
   // least the last Position's i.
   BlockSurroundings Surroundings(uint64_t start, uint32_t length);
   // Color i as decoded.
-  void Record(uint64_t i, const Rgb8& c) { decoded_[i] = c; }
+  void Record(uint64_t i, const Rgb8& c) { decoded_[i] = c.r | uint64_t{c.g} << 16 | uint64_t{c.b} << 32 | kOne; }
 
  private:
   // A walk forward through the bricks: `near` holds brick `current`'s neighbour bricks that precede
@@ -85,13 +85,18 @@ class WeightContexts {
   };
   void Seek(Cursor& cursor, uint64_t i);
   void EnterBrick(Cursor& cursor, size_t k);
-  // Calls f(neighbour index, weight) for each neighbour of color i in `table` (of a cell's neighbour
-  // groups by its bit in the brick) that precedes it.
-  template <typename Table, typename F>
-  void ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const;
+  // The weighted sum of the packed colors (below) of color i's neighbours in `table` (of a cell's
+  // neighbour groups by its bit in the brick) that precede it, with kBelowOnly those before `below`.
+  template <bool kBelowOnly, typename Table>
+  uint64_t PrecedingSum(const Table& table, const Cursor& cursor, uint64_t i, uint64_t below) const;
 
+  // Decoded colors packed as r | g << 16 | b << 32 | 1 << 48, so that a neighbour's weighted color
+  // and its weight add up in one multiply-add: no lane of a sum overflows (at most 255 x 124, the
+  // largest total weight, the cells two away, each in 16 bits). With Position's 32-bit division:
+  // the weight contexts of a lion 1 cm decode at 38 dB 185 -> 172 M instructions.
+  static constexpr uint64_t kOne = uint64_t{1} << 48;
   std::span<const uint64_t> morton_;
-  std::vector<Rgb8> decoded_;
+  std::vector<uint64_t> decoded_;
   VoxelBricks bricks_;
   Cursor weights_, ends_;
   // The bricks most recently entered by either cursor: the other enters the same ones soon after.
