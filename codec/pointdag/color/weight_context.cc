@@ -29,7 +29,7 @@ constexpr int BrickBit(int x, int y, int z) {
 }
 
 // A neighbour that may precede a voxel, seen from the voxel's cell in its brick: the brick it lies
-// in (slot of a cursor's near bricks), its bit there, and its weight.
+// in (its slot in a brick's Near), its bit there, and its weight.
 struct Neighbour {
   uint8_t slot, bit, weight;
 };
@@ -101,29 +101,23 @@ constexpr auto kFarNeighbours = GroupNeighbours(MakeNeighbourTable<79>(1, 2, [](
 
 }  // namespace
 
-WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()), bricks_(morton) {
-  for (Cursor& c : recent_) c.current = SIZE_MAX;
-  if (!bricks_.all().empty()) {
-    EnterBrick(weights_, 0);
-    ends_ = weights_;
-  }
-}
+WeightContexts::WeightContexts(std::span<const uint64_t> morton)
+    : morton_(morton), decoded_(morton.size()), bricks_(morton),
+      entered_(std::min<size_t>(128, std::bit_ceil(std::max<size_t>(1, bricks_.all().size())))),
+      entered_mask_(entered_.size() - 1) {}
 
-void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
-  size_t k = cursor.current;
+const WeightContexts::Near& WeightContexts::Seek(size_t& cursor, uint64_t i) {
+  size_t k = cursor;
   const std::vector<VoxelBrick>& bricks = bricks_.all();
   while (k + 1 < bricks.size() && bricks[k + 1].first <= i) ++k;
-  if (k != cursor.current) EnterBrick(cursor, k);
+  cursor = k;
+  Entered& entry = entered_[k & entered_mask_];
+  if (entry.brick != k) EnterBrick(entry, k);
+  return entry.near;
 }
 
-void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
-  for (const Cursor& c : recent_) {
-    if (c.current == k) {
-      cursor = c;
-      return;
-    }
-  }
-  cursor.current = k;
+void WeightContexts::EnterBrick(Entered& entry, size_t k) {
+  entry.brick = k;
   const uint64_t code = bricks_.all()[k].code;
   // Each axis' bits moved by -1, 0, +1 once: a neighbour's code is one of each axis' ORed together.
   std::array<std::array<uint64_t, 3>, 3> moved{};
@@ -139,7 +133,7 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   for (int x = 0; x < 3; ++x) {
     for (int y = 0; y < 3; ++y) {
       for (int z = 0; z < 3; ++z) {
-        VoxelBrick& near = cursor.near[x * 9 + y * 3 + z];
+        VoxelBrick& near = entry.near[x * 9 + y * 3 + z];
         near = {0, 0, 0};
         if (!inside[0][x] || !inside[1][y] || !inside[2][z]) continue;  // outside the grid
         const uint64_t c = moved[0][x] | moved[1][y] | moved[2][z] | rest;
@@ -148,17 +142,15 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
       }
     }
   }
-  recent_[next_recent_] = cursor;
-  next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
 template <bool kBelowOnly, typename Table>
-uint64_t WeightContexts::PrecedingSum(const Table& table, const Cursor& cursor, uint64_t i, uint64_t below) const {
+uint64_t WeightContexts::PrecedingSum(const Table& table, const Near& near_bricks, uint64_t i, uint64_t below) const {
   const auto& cell = table[morton_[i] & 63];
   uint64_t sum = 0;
   for (size_t g = 0; g < cell.count; ++g) {
     const NeighbourGroup& group = cell.group[g];
-    const VoxelBrick& near = cursor.near[group.slot];
+    const VoxelBrick& near = near_bricks[group.slot];
     uint64_t colors = 0;  // the group's, weighed once
     for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
       const uint32_t j = near.IndexOf(std::countr_zero(present));
@@ -170,10 +162,10 @@ uint64_t WeightContexts::PrecedingSum(const Table& table, const Cursor& cursor, 
 }
 
 NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, int bits, bool far) {
-  Seek(weights_, i);
-  uint64_t sum = PrecedingSum<false>(kNeighbours, weights_, i, i);  // the neighbours' colors, weighted
+  const Near& near = Seek(weights_, i);
+  uint64_t sum = PrecedingSum<false>(kNeighbours, near, i, i);  // the neighbours' colors, weighted
   const bool beyond = sum == 0 && far;
-  if (beyond) sum = PrecedingSum<false>(kFarNeighbours, weights_, i, i);
+  if (beyond) sum = PrecedingSum<false>(kFarNeighbours, near, i, i);
   const int64_t total = static_cast<int64_t>(sum >> 48), r = sum & 0xFFFF, g = sum >> 16 & 0xFFFF, b = sum >> 32 & 0xFFFF;
   if (total == 0) return {};
   // Their mean's position on the segment A -> B in weight (half) steps, rounded, clamped to 0..m
@@ -196,8 +188,7 @@ BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) 
   BlockSurroundings s;
   const uint64_t stop = start + std::min(length, kPredictingVoxels);
   for (uint64_t i = start; i < stop; ++i) {
-    Seek(ends_, i);
-    const uint64_t sum = PrecedingSum<true>(kNeighbours, ends_, i, start);  // inside the block: not decoded yet
+    const uint64_t sum = PrecedingSum<true>(kNeighbours, Seek(ends_, i), i, start);  // inside the block: not decoded yet
     s.r += sum & 0xFFFF;
     s.g += sum >> 16 & 0xFFFF;
     s.b += sum >> 32 & 0xFFFF;
