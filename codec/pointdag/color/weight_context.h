@@ -19,7 +19,7 @@
 // comes from a table per cell. Whole-file decode of lion 1 cm at 38 dB (DecodePdag, one core):
 // version 2 52 ms; version 3 with a hash table of the voxels' codes 114 ms, with bricks 106, with
 // the table and one projection per weight (not per neighbour) 88. Version 4 walks the bricks twice
-// (the endpoints' walk runs ahead of the weights'), sharing the bricks last entered.
+// (the endpoints' walk runs ahead of the weights'), sharing the bricks entered (entered_ below).
 #pragma once
 
 #include <array>
