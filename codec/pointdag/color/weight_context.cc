@@ -29,7 +29,7 @@ constexpr int BrickBit(int x, int y, int z) {
 }
 
 // A neighbour that may precede a voxel, seen from the voxel's cell in its brick: the brick it lies
-// in (slot of a cursor's near bricks), its bit there, and its weight.
+// in (its slot in a brick's Near), its bit there, and its weight.
 struct Neighbour {
   uint8_t slot, bit, weight;
 };
@@ -101,29 +101,23 @@ constexpr auto kFarNeighbours = GroupNeighbours(MakeNeighbourTable<79>(1, 2, [](
 
 }  // namespace
 
-WeightContexts::WeightContexts(std::span<const uint64_t> morton) : morton_(morton), decoded_(morton.size()), bricks_(morton) {
-  for (Cursor& c : recent_) c.current = SIZE_MAX;
-  if (!bricks_.all().empty()) {
-    EnterBrick(weights_, 0);
-    ends_ = weights_;
-  }
-}
+WeightContexts::WeightContexts(std::span<const uint64_t> morton)
+    : morton_(morton), decoded_(morton.size()), bricks_(morton),
+      entered_(std::min<size_t>(128, std::bit_ceil(std::max<size_t>(1, bricks_.all().size())))),
+      entered_mask_(entered_.size() - 1) {}
 
-void WeightContexts::Seek(Cursor& cursor, uint64_t i) {
-  size_t k = cursor.current;
+const WeightContexts::Near& WeightContexts::Seek(size_t& cursor, uint64_t i) {
+  size_t k = cursor;
   const std::vector<VoxelBrick>& bricks = bricks_.all();
   while (k + 1 < bricks.size() && bricks[k + 1].first <= i) ++k;
-  if (k != cursor.current) EnterBrick(cursor, k);
+  cursor = k;
+  Entered& entry = entered_[k & entered_mask_];
+  if (entry.brick != k) EnterBrick(entry, k);
+  return entry.near;
 }
 
-void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
-  for (const Cursor& c : recent_) {
-    if (c.current == k) {
-      cursor = c;
-      return;
-    }
-  }
-  cursor.current = k;
+void WeightContexts::EnterBrick(Entered& entry, size_t k) {
+  entry.brick = k;
   const uint64_t code = bricks_.all()[k].code;
   // Each axis' bits moved by -1, 0, +1 once: a neighbour's code is one of each axis' ORed together.
   std::array<std::array<uint64_t, 3>, 3> moved{};
@@ -139,7 +133,7 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
   for (int x = 0; x < 3; ++x) {
     for (int y = 0; y < 3; ++y) {
       for (int z = 0; z < 3; ++z) {
-        VoxelBrick& near = cursor.near[x * 9 + y * 3 + z];
+        VoxelBrick& near = entry.near[x * 9 + y * 3 + z];
         near = {0, 0, 0};
         if (!inside[0][x] || !inside[1][y] || !inside[2][z]) continue;  // outside the grid
         const uint64_t c = moved[0][x] | moved[1][y] | moved[2][z] | rest;
@@ -148,35 +142,31 @@ void WeightContexts::EnterBrick(Cursor& cursor, size_t k) {
       }
     }
   }
-  recent_[next_recent_] = cursor;
-  next_recent_ = (next_recent_ + 1) % recent_.size();
 }
 
-template <typename Table, typename F>
-void WeightContexts::ForEachPreceding(const Table& table, const Cursor& cursor, uint64_t i, F&& f) const {
+template <bool kBelowOnly, typename Table>
+uint64_t WeightContexts::PrecedingSum(const Table& table, const Near& near_bricks, uint64_t i, uint64_t below) const {
   const auto& cell = table[morton_[i] & 63];
+  uint64_t sum = 0;
   for (size_t g = 0; g < cell.count; ++g) {
     const NeighbourGroup& group = cell.group[g];
-    const VoxelBrick& near = cursor.near[group.slot];
+    const VoxelBrick& near = near_bricks[group.slot];
+    uint64_t colors = 0;  // the group's, weighed once
     for (uint64_t present = near.cells & group.cells; present != 0; present &= present - 1) {
-      f(size_t{near.IndexOf(std::countr_zero(present))}, group.weight);
+      const uint32_t j = near.IndexOf(std::countr_zero(present));
+      if (!kBelowOnly || j < below) colors += decoded_[j];
     }
+    sum += group.weight * colors;
   }
+  return sum;
 }
 
 NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, int bits, bool far) {
-  Seek(weights_, i);
-  int64_t r = 0, g = 0, b = 0, total = 0;  // the neighbours' colors, weighted
-  const auto add = [&](size_t j, int64_t weight) {
-    const Rgb8 c = decoded_[j];
-    r += weight * c.r;
-    g += weight * c.g;
-    b += weight * c.b;
-    total += weight;
-  };
-  ForEachPreceding(kNeighbours, weights_, i, add);
-  const bool beyond = total == 0 && far;
-  if (beyond) ForEachPreceding(kFarNeighbours, weights_, i, add);
+  const Near& near = Seek(weights_, i);
+  uint64_t sum = PrecedingSum<false>(kNeighbours, near, i, i);  // the neighbours' colors, weighted
+  const bool beyond = sum == 0 && far;
+  if (beyond) sum = PrecedingSum<false>(kFarNeighbours, near, i, i);
+  const int64_t total = static_cast<int64_t>(sum >> 48), r = sum & 0xFFFF, g = sum >> 16 & 0xFFFF, b = sum >> 32 & 0xFFFF;
   if (total == 0) return {};
   // Their mean's position on the segment A -> B in weight (half) steps, rounded, clamped to 0..m
   // (0..2m; 0 where A = B): one division per weight, not one per neighbour.
@@ -185,24 +175,24 @@ NeighbourPosition WeightContexts::Position(uint64_t i, const Endpoints& ends, in
   const int64_t len2 = sr * sr + sg * sg + sb * sb;
   const int64_t dot = (r - total * ends.a.r) * sr + (g - total * ends.a.g) * sg + (b - total * ends.a.b) * sb;
   if (dot <= 0 || len2 == 0) return {true, beyond, 0, 0};
-  const int64_t unit = 2 * total * len2;
-  return {true, beyond, static_cast<uint32_t>(std::min(m, (2 * dot * m + total * len2) / unit)),
-          static_cast<uint32_t>(std::min(2 * m, (4 * dot * m + total * len2) / unit))};
+  // In 32 bits, whose division is the cheaper: dot and len2 are at most total x 3 x 255^2 and 3 x
+  // 255^2 (each neighbour's (c - A).(B - A) by Cauchy-Schwarz), total at most 124, so 4 dot m +
+  // total len2 <= 61 x 124 x 195075 < 2^31.
+  const auto unit = static_cast<uint32_t>(2 * total * len2), half = static_cast<uint32_t>(total * len2);
+  const auto scaled = static_cast<uint32_t>(dot * m);
+  return {true, beyond, std::min(static_cast<uint32_t>(m), (2 * scaled + half) / unit),
+          std::min(static_cast<uint32_t>(2 * m), (4 * scaled + half) / unit)};
 }
 
 BlockSurroundings WeightContexts::Surroundings(uint64_t start, uint32_t length) {
   BlockSurroundings s;
   const uint64_t stop = start + std::min(length, kPredictingVoxels);
   for (uint64_t i = start; i < stop; ++i) {
-    Seek(ends_, i);
-    ForEachPreceding(kNeighbours, ends_, i, [&](size_t j, int64_t weight) {
-      if (j >= start) return;  // inside the block: not decoded yet
-      const Rgb8 c = decoded_[j];
-      s.r += weight * c.r;
-      s.g += weight * c.g;
-      s.b += weight * c.b;
-      s.weight += weight;
-    });
+    const uint64_t sum = PrecedingSum<true>(kNeighbours, Seek(ends_, i), i, start);  // inside the block: not decoded yet
+    s.r += sum & 0xFFFF;
+    s.g += sum >> 16 & 0xFFFF;
+    s.b += sum >> 32 & 0xFFFF;
+    s.weight += sum >> 48;
   }
   return s;
 }
