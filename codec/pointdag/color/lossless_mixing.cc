@@ -102,9 +102,17 @@ class MixedCoder {
 
   // Color i (the decoder's colors[i] is not read) from colors [0, i).
   template <class Io>
-  Rgb8 Code(Io& io, std::span<const Rgb8> colors, size_t i, const Neighbourhood& around) {
-    const Prediction p = predict_(colors, i, around);
-    Rgb8 c = colors[i];
+  Rgb8 Code(Io& io, std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log = nullptr) {
+    return CodeFrom(io, colors[i], i, predict_(colors, i, around, log));
+  }
+  template <class Io>
+  Rgb8 Replay(Io& io, std::span<const Rgb8> colors, size_t i, const Predicted& known) {
+    return CodeFrom(io, colors[i], i, predict_.Replay(i, known));
+  }
+
+ private:
+  template <class Io>
+  Rgb8 CodeFrom(Io& io, Rgb8 c, size_t i, const Prediction& p) {
     const int unpredicted = p.none ? kSpreadBuckets : 0;
     const int sg = Bucket(p.spread_g, kSpreadBuckets) + unpredicted;
     g_.context = {sg, sg * 8 + Bucket(std::abs(last_eg_), 8), 0, Bucket(p.spread_rg + p.spread_bg, 8) * 8 + Bucket(p.spread_g, 8)};
@@ -132,7 +140,6 @@ class MixedCoder {
     return c;
   }
 
- private:
   static constexpr int kS = 2 * kSpreadBuckets, kR = kResidualBuckets;
   ChannelCoder g_{{kS, kS * 8, 1, 64}};
   ChannelCoder red_{{kS * kR, kS * 16, 1, 8 * kR}};
@@ -177,8 +184,12 @@ void MixedEncoder::Reset() {
   state_->io = EncodeIo{};
 }
 
-void MixedEncoder::Code(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around) {
-  state_->coder.Code(state_->io, colors, i, around);
+void MixedEncoder::Code(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log) {
+  state_->coder.Code(state_->io, colors, i, around, log);
+}
+
+void MixedEncoder::Replay(std::span<const Rgb8> colors, size_t i, const Predicted& known) {
+  state_->coder.Replay(state_->io, colors, i, known);
 }
 
 size_t MixedEncoder::FinishedSize() const {

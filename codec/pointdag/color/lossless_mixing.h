@@ -27,8 +27,11 @@ class MixedEncoder {
 
   // Back to an empty stream, for another trial.
   void Reset();
-  // Codes colors[i] after colors [0, i), predicted from `around` (empty without Morton codes).
-  void Code(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around);
+  // Codes colors[i] after colors [0, i), predicted from `around` (empty without Morton codes);
+  // `log`: where to keep the prediction too.
+  void Code(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log = nullptr);
+  // Codes colors[i] with the prediction `known` for these colors.
+  void Replay(std::span<const Rgb8> colors, size_t i, const Predicted& known);
   // The bytes Finish() would return now.
   size_t FinishedSize() const;
   std::vector<uint8_t> Finish();

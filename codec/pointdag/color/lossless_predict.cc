@@ -75,7 +75,28 @@ void Predictor::Reset() {
   if (!morton_.empty() && version_ >= 3) cells_.emplace(morton_);
 }
 
-Prediction Predictor::operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around) {
+Predicted Swapped(const Predicted& p) {
+  const auto swap = [](Prediction q) {
+    std::swap(q.rg, q.bg);
+    std::swap(q.spread_rg, q.spread_bg);
+    return q;
+  };
+  return {swap(p.chosen), swap(p.near), swap(p.wide)};
+}
+
+Prediction Predictor::operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log) {
+  const Prediction p = Compute(colors, i, around);
+  if (log != nullptr) *log = {p, near_, wide_};
+  return p;
+}
+
+Prediction Predictor::Replay(size_t i, const Predicted& known) {
+  if (cells_) cells_->Enter(i);
+  near_ = known.near, wide_ = known.wide;
+  return known.chosen;
+}
+
+Prediction Predictor::Compute(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around) {
   near_ = wide_ = Prediction{};
   if (!morton_.empty()) {
     if (cells_) cells_->Enter(i);

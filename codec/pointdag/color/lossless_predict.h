@@ -51,6 +51,15 @@ struct Neighbourhood {
 // The neighbours' colors folded into a prediction, each weighing weights[d2].
 Prediction Predict(std::span<const Neighbour> found, std::span<const Rgb8> colors, const Weights& weights);
 
+// A voxel's prediction and the two weightings tried for it. Swapped: the same for the colors with
+// R and B swapped (the channel order with the same lead, lossless_transform.h), which the encoder's
+// layout trials replay instead of predicting again (the misses that choose the weighting add the
+// channels' alike, so the choice is the same).
+struct Predicted {
+  Prediction chosen, near, wide;
+};
+Predicted Swapped(const Predicted& p);
+
 inline int Miss(const Prediction& p, const Rgb8& c) {
   return std::abs(c.g - p.g) + std::abs(c.r - c.g - p.rg) + std::abs(c.b - c.g - p.bg);
 }
@@ -107,8 +116,10 @@ class Predictor {
   Predictor(std::span<const uint64_t> morton, int version);
   // Back to the first color, for another stream over the same voxels.
   void Reset();
-  // `around`: voxel i's neighbourhood (empty without Morton codes).
-  Prediction operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around);
+  // `around`: voxel i's neighbourhood (empty without Morton codes). `log`: where to keep it too.
+  Prediction operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log = nullptr);
+  // Voxel i's prediction as `known` (by another trial, for these colors).
+  Prediction Replay(size_t i, const Predicted& known);
   // After color i is known: how far each weighting was from it.
   void Record(size_t i, const Rgb8& c);
 
@@ -116,6 +127,8 @@ class Predictor {
   std::span<const uint64_t> morton_;
   int version_;
   std::optional<CellMeans> cells_;
+  Prediction Compute(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around);
+
   std::vector<std::array<uint16_t, 2>> misses_;  // written for each voxel before its neighbours read it
   Prediction near_, wide_;
 };
