@@ -24,8 +24,8 @@ NeighbourhoodSearch::NeighbourhoodSearch(std::span<const uint64_t> morton, int v
   if (columns) columns_.emplace(morton);
 }
 
-Neighbourhood NeighbourhoodSearch::Next(size_t i, size_t* box) {
-  n_ = 0;
+Neighbourhood NeighbourhoodSearch::Next(size_t i, BoxCounts* box) {
+  n_ = adjacent_n_ = 0;
   const auto add = [this](size_t j, int d2) { Add(j, d2); };
   neighbours_.ForEach(i, 0, kRadius, add);
   Neighbourhood around;
@@ -35,7 +35,7 @@ Neighbourhood NeighbourhoodSearch::Next(size_t i, size_t* box) {
   }
   around.reach = version_ >= 3 && n_ < kFewNeighbours;
   if (around.reach) neighbours_.ForEach(i, kRadius, kFarRadius, add);
-  if (box != nullptr) *box = n_;
+  if (box != nullptr) *box = {n_, adjacent_n_};
   if (columns_) {
     const auto add_column = [this](size_t j, int dxy2) { Add(j, ColumnD2(dxy2)); };
     const int reached = around.reach ? kFarRadius : kRadius;
@@ -44,18 +44,21 @@ Neighbourhood NeighbourhoodSearch::Next(size_t i, size_t* box) {
     columns_->Record(i);
   }
   around.found = {found_.data(), n_};
+  around.adjacent = {adjacent_.data(), adjacent_n_};
   return around;
 }
 
 RecordedNeighbourhoods::RecordedNeighbourhoods(NeighbourhoodSearch& search, size_t count) {
   voxels_.reserve(count);
   found_.reserve(count * 8);
+  adjacent_.reserve(count * 4);
   for (size_t i = 0; i < count; ++i) {
-    size_t box = 0;
+    NeighbourhoodSearch::BoxCounts box;
     const Neighbourhood around = search.Next(i, &box);
-    const size_t begin = found_.size();
+    const size_t begin = found_.size(), adjacent_begin = adjacent_.size();
     found_.insert(found_.end(), around.found.begin(), around.found.end());
-    voxels_.push_back({begin, begin + box, found_.size(), around.reach});
+    adjacent_.insert(adjacent_.end(), around.adjacent.begin(), around.adjacent.end());
+    voxels_.push_back({begin, begin + box.found, found_.size(), adjacent_begin, adjacent_begin + box.adjacent, adjacent_.size(), around.reach});
   }
 }
 

@@ -22,9 +22,13 @@ class NeighbourhoodSearch {
   // column mode (version 3 and up).
   NeighbourhoodSearch(std::span<const uint64_t> morton, int version, bool columns);
 
+  // How many of a neighbourhood's found and adjacent voxels the box gave.
+  struct BoxCounts {
+    size_t found = 0, adjacent = 0;
+  };
   // Voxel i's neighbourhood, valid until the next call; the voxels in order, each once. In column
-  // mode the columns' voxels follow the box's: the first `box` found are those without columns.
-  Neighbourhood Next(size_t i, size_t* box = nullptr);
+  // mode the columns' voxels follow the box's in both lists: `box` counts those without columns.
+  Neighbourhood Next(size_t i, BoxCounts* box = nullptr);
 
   // From here on without the columns (a column trial lost).
   void DropColumns() { columns_.reset(); }
@@ -32,14 +36,19 @@ class NeighbourhoodSearch {
  private:
   // The found voxels, up to the ±4 box and the columns within ±6.
   void Add(size_t j, int d2) {
-    if (n_ < found_.size()) found_[n_++] = {static_cast<uint32_t>(j), static_cast<uint32_t>(d2)};
+    if (n_ == found_.size()) return;
+    found_[n_++] = {static_cast<uint32_t>(j), static_cast<uint32_t>(d2)};
+    if (d2 <= kAdjacent) adjacent_[adjacent_n_++] = found_[n_ - 1];
   }
+  static constexpr int kAdjacent = 3;  // d2 of the 26 adjacent voxels, and of the 5 nearest columns' (d2 1 or 3)
 
   int version_;
   CausalNeighbours neighbours_;
   std::optional<CausalColumns> columns_;
   std::array<Neighbour, 9 * 9 * 9 - 1 + 13 * 13> found_{};  // a member: not cleared per voxel
   size_t n_ = 0;
+  std::array<Neighbour, 26 + 5> adjacent_{};
+  size_t adjacent_n_ = 0;
 };
 
 // The neighbourhoods of the first voxels, with and without the columns, found once for the
@@ -52,15 +61,18 @@ class RecordedNeighbourhoods {
   Neighbourhood At(size_t i, bool columns) const {
     const Voxel& v = voxels_[i];
     const std::span<const Neighbour> all(found_.data() + v.begin, (columns ? v.end : v.box) - v.begin);
-    return {all, v.reach, false};
+    const std::span<const Neighbour> adjacent(adjacent_.data() + v.adjacent_begin,
+                                              (columns ? v.adjacent_end : v.adjacent_box) - v.adjacent_begin);
+    return {all, adjacent, v.reach, false};
   }
 
  private:
   struct Voxel {
     size_t begin, box, end;
+    size_t adjacent_begin, adjacent_box, adjacent_end;
     bool reach;
   };
-  std::vector<Neighbour> found_;
+  std::vector<Neighbour> found_, adjacent_;
   std::vector<Voxel> voxels_;
 };
 

@@ -104,11 +104,10 @@ Prediction Predictor::Compute(std::span<const Rgb8> colors, size_t i, const Neig
       const Prediction far = Predict(around.found, colors, kFar);
       if (!far.none) return far;
     } else {
-      near_ = Predict(around.found, colors, kNear);
+      near_ = Predict(around.adjacent, colors, kNear);
       wide_ = Predict(around.found, colors, around.reach ? kWideFar : kWide);
       int near_miss = 0, wide_miss = 0;
-      for (const Neighbour& n : around.found) {
-        if (n.d2 > 3) continue;
+      for (const Neighbour& n : around.adjacent) {
         near_miss += misses_[n.index][0];
         wide_miss += misses_[n.index][1];
       }

@@ -44,6 +44,7 @@ struct Neighbour {
 // voxels alone, not on their colors.
 struct Neighbourhood {
   std::span<const Neighbour> found;
+  std::span<const Neighbour> adjacent;  // those of `found` with d2 <= 3, the only ones kNear weighs
   bool reach = false;  // version 3: fewer than kFewNeighbours within ±2, so those within ±4 joined
   bool far = false;    // version 2: none within ±2; `found` holds those within ±4, to predict alone
 };
