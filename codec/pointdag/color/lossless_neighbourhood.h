@@ -4,6 +4,7 @@
 // (lossless_layout.h) find them once and replay them.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
