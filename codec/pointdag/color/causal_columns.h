@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstdlib>
@@ -30,22 +31,28 @@ class CausalColumns {
   }
 
   // Calls visit(j, dxy2) for the last decoded voxel j of each column (x + dx, y + dy) with
-  // r_in < max(|dx|, |dy|) <= r_out (r_in = -1: the voxel's own column too) that is not within ±box
-  // of voxel i on every axis (those the box search has found), dxy2 = dx² + dy².
+  // r_in < max(|dx|, |dy|) <= r_out <= 6 (r_in = -1: the voxel's own column too) that is not within
+  // ±box of voxel i on every axis (those the box search has found), dxy2 = dx² + dy².
   template <class Visit>
   void ForEach(size_t i, int r_in, int r_out, int box, Visit&& visit) const {
-    const auto [x, y, z] = MortonDecode(morton_[i]);
+    const uint64_t code = morton_[i];
+    const int64_t x = CompactBits3(code >> 2), y = CompactBits3(code >> 1), z = CompactBits3(code);
+    // The columns' keys are their x and y bits spread apart: y's spread once per dy, x's per dx.
+    std::array<uint64_t, 2 * kMaxRadius + 1> y_bits{};
+    for (int dy = -r_out; dy <= r_out; ++dy) {
+      const int64_t cy = y + dy;
+      y_bits[dy + r_out] = cy < 0 || cy > kMaxCoordinate ? kOutside : SpreadBits3(static_cast<uint32_t>(cy)) << 1;
+    }
     for (int dx = -r_out; dx <= r_out; ++dx) {
+      const int64_t cx = x + dx;
+      if (cx < 0 || cx > kMaxCoordinate) continue;
+      const uint64_t x_bits = SpreadBits3(static_cast<uint32_t>(cx)) << 2;
       for (int dy = -r_out; dy <= r_out; ++dy) {
-        if (std::max(std::abs(dx), std::abs(dy)) <= r_in) continue;
-        const int64_t cx = int64_t{x} + dx, cy = int64_t{y} + dy;
-        if (cx < 0 || cy < 0) continue;
-        if (cx > kMaxCoordinate || cy > kMaxCoordinate) continue;
-        const uint32_t slot = slots_[Find(MortonEncode(static_cast<uint32_t>(cx), static_cast<uint32_t>(cy), 0))];
+        if (std::max(std::abs(dx), std::abs(dy)) <= r_in || y_bits[dy + r_out] == kOutside) continue;
+        const uint32_t slot = slots_[Find(x_bits | y_bits[dy + r_out])];
         if (slot == 0) continue;
         const uint32_t j = slot - 1;
-        const int64_t dz = int64_t{MortonDecode(morton_[j])[2]} - z;
-        if (std::abs(dz) <= box && std::abs(dx) <= box && std::abs(dy) <= box) continue;
+        if (std::abs(dx) <= box && std::abs(dy) <= box && std::abs(int64_t{CompactBits3(morton_[j])} - z) <= box) continue;
         visit(size_t{j}, dx * dx + dy * dy);
       }
     }
@@ -55,6 +62,8 @@ class CausalColumns {
   // The x and y bits of a Morton code: a column's key.
   static constexpr uint64_t kXy = MortonEncode((1u << kMaxDepth) - 1, (1u << kMaxDepth) - 1, 0);
   static constexpr int64_t kMaxCoordinate = (int64_t{1} << kMaxDepth) - 1;
+  static constexpr int kMaxRadius = 6;  // of ForEach's r_out
+  static constexpr uint64_t kOutside = ~uint64_t{0};  // no column's key
 
   // The slot of column `key`: the one holding it, else the empty one where it would go.
   size_t Find(uint64_t key) const {

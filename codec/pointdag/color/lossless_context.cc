@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <memory>
+#include <optional>
 
+#include "pointdag/color/lossless_layout.h"
 #include "pointdag/color/lossless_mixing.h"
+#include "pointdag/color/lossless_neighbourhood.h"
 #include "pointdag/color/lossless_predict.h"
 #include "pointdag/color/lossless_transform.h"
 #include "pointdag/entropy/adaptive_codes.h"
@@ -34,9 +37,11 @@ template <class Io>
 void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton) {
   auto models = std::make_unique<Models>();
   Predictor predict(morton, 2);
+  std::optional<NeighbourhoodSearch> search;
+  if (!morton.empty()) search.emplace(morton, 2, false);
   Share share_r, share_b;
   for (size_t i = 0; i < colors.size(); ++i) {
-    const Prediction p = predict(colors, i);
+    const Prediction p = predict(colors, i, search ? search->Next(i) : Neighbourhood{});
     Rgb8& c = colors[i];
     const int ctx = Bucket(p.spread_g, kSpreadBuckets) + (p.none ? kSpreadBuckets : 0);
     const int eg = io.Code(models->g[ctx], Wrap(c.g - p.g));
@@ -80,34 +85,6 @@ bool DecodeGammaResiduals(std::span<const uint8_t> coded, std::span<Rgb8> colors
   return io.rc.consumed_exactly();
 }
 
-// Version 4: version 3's coder on the colors in the layout's channel order.
-std::vector<uint8_t> EncodeLaid(std::span<const Rgb8> colors, std::span<const uint64_t> morton, Layout layout) {
-  std::vector<Rgb8> reordered(colors.size());
-  std::transform(colors.begin(), colors.end(), reordered.begin(), [&layout](Rgb8 c) { return Reorder(c, layout.order); });
-  return EncodeMixed(reordered, morton, layout.columns);
-}
-
-// The layout that codes the first colors smallest: their bytes are what they would be in the whole
-// stream (each color is coded from earlier ones only), and the first eighth (at least 16384) of
-// the Morton order is a region of the scan large enough to tell an airborne scan's columns from a
-// close-up's. Column mode first (order 0), then the channel order with it.
-Layout ChooseLayout(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
-  constexpr size_t kMinSample = 16384;
-  const size_t n = std::min(colors.size(), std::max(kMinSample, colors.size() / 8));
-  const auto sample = colors.first(n);
-  const auto sample_morton = morton.empty() ? morton : morton.first(n);
-  Layout best;
-  size_t best_size = EncodeLaid(sample, sample_morton, best).size();
-  const auto consider = [&](Layout layout) {
-    const size_t size = EncodeLaid(sample, sample_morton, layout).size();
-    if (size < best_size) best = layout, best_size = size;
-  };
-  if (!morton.empty()) consider({0, true});
-  const bool columns = best.columns;
-  for (int order = 1; order < kChannelOrders; ++order) consider({order, columns});
-  return best;
-}
-
 }  // namespace
 
 StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
@@ -120,8 +97,12 @@ StatusOr<std::vector<uint8_t>> EncodeLosslessContext(std::span<const Rgb8> color
   Layout layout;  // version 3's: the coder of version 4 with order 0 and no columns
   if (version >= 4) {
     if (!layout_byte) {
-      layout = ChooseLayout(colors, morton);
-    } else if (!LayoutOf(*layout_byte, layout) || (layout.columns && morton.empty())) {
+      LaidOut chosen = EncodeChosenLayout(colors, morton);
+      out.push_back(chosen.layout.Byte());
+      out.insert(out.end(), chosen.coded.begin(), chosen.coded.end());
+      return out;
+    }
+    if (!LayoutOf(*layout_byte, layout) || (layout.columns && morton.empty())) {
       return InvalidArgument("lossless colors: no layout " + std::to_string(*layout_byte));
     }
     out.push_back(layout.Byte());

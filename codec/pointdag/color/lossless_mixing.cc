@@ -4,6 +4,7 @@
 #include <array>
 #include <memory>
 
+#include "pointdag/color/lossless_neighbourhood.h"
 #include "pointdag/color/lossless_predict.h"
 #include "pointdag/entropy/binary_range_coder.h"
 #include "pointdag/entropy/logistic.h"
@@ -24,7 +25,13 @@ class ChannelCoder {
   // Contexts per model.
   explicit ChannelCoder(const std::array<int, kModels>& sizes) {
     for (int k = 0; k < kModels; ++k) models_[k].resize(static_cast<size_t>(sizes[k]) * kMixedDecisions);
+    Reset();
+  }
+  // As new, without allocating.
+  void Reset() {
+    for (auto& models : models_) std::fill(models.begin(), models.end(), SteadyBitModel{});
     for (auto& w : weights_) w = {kInitialWeight, kInitialWeight, kInitialWeight, kInitialWeight, 0};
+    plain_.fill(SteadyBitModel{});
   }
   std::array<int, kModels> context{};
   int mix_context = 0;  // 0..7
@@ -76,50 +83,71 @@ class ChannelCoder {
 
 constexpr int kSpreadBuckets = 7, kResidualBuckets = 6;
 
-// One loop for both sides: `io.Bit(model, bit)` writes the bit (encoder) or returns the decoded
-// one (decoder), and `colors[i]` is rebuilt from the residuals, so both see the same past.
+// One step for both sides: `io.Bit(model, bit)` writes the bit (encoder) or returns the decoded
+// one (decoder), and color i is rebuilt from the residuals, so both see the same past.
 // The contexts, with s(x) = b₇(spread of x) + 7·unpredicted (b_k as Bucket) and eg, er the coded
 // residuals of G and R: G by s(G); s(G) and the previous voxel's |eg|; nothing; and the chroma's
 // and G's spreads. R (B alike, with its own spread) by s(R-G) and |eg|; s(R-G), eg's sign and |eg|;
 // nothing (for B: er); and G's spread and |eg|.
-template <class Io>
-void CodeColors(Io& io, std::span<Rgb8> colors, std::span<const uint64_t> morton, bool columns) {
-  constexpr int s = 2 * kSpreadBuckets, r = kResidualBuckets;
-  auto g = std::make_unique<ChannelCoder>(std::array<int, kModels>{s, s * 8, 1, 64});
-  auto red = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 1, 8 * r});
-  auto blue = std::make_unique<ChannelCoder>(std::array<int, kModels>{s * r, s * 16, 32, 8 * r});
-  Predictor predict(morton, 3, columns);
-  Share share_r, share_b;
-  int last_eg = 0;
-  for (size_t i = 0; i < colors.size(); ++i) {
-    const Prediction p = predict(colors, i);
-    Rgb8& c = colors[i];
+class MixedCoder {
+ public:
+  explicit MixedCoder(std::span<const uint64_t> morton) : predict_(morton, 3) {}
+
+  void Reset() {
+    g_.Reset(), red_.Reset(), blue_.Reset();
+    predict_.Reset();
+    share_r_ = share_b_ = Share{};
+    last_eg_ = 0;
+  }
+
+  // Color i (the decoder's colors[i] is not read) from colors [0, i).
+  template <class Io>
+  Rgb8 Code(Io& io, std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log = nullptr) {
+    return CodeFrom(io, colors[i], i, predict_(colors, i, around, log));
+  }
+  template <class Io>
+  Rgb8 Replay(Io& io, std::span<const Rgb8> colors, size_t i, const Predicted& known) {
+    return CodeFrom(io, colors[i], i, predict_.Replay(i, known));
+  }
+
+ private:
+  template <class Io>
+  Rgb8 CodeFrom(Io& io, Rgb8 c, size_t i, const Prediction& p) {
     const int unpredicted = p.none ? kSpreadBuckets : 0;
     const int sg = Bucket(p.spread_g, kSpreadBuckets) + unpredicted;
-    g->context = {sg, sg * 8 + Bucket(std::abs(last_eg), 8), 0, Bucket(p.spread_rg + p.spread_bg, 8) * 8 + Bucket(p.spread_g, 8)};
-    g->mix_context = std::min(kMixContexts - 1, sg);
-    const int eg = g->Code(io, Wrap(c.g - p.g));
+    g_.context = {sg, sg * 8 + Bucket(std::abs(last_eg_), 8), 0, Bucket(p.spread_rg + p.spread_bg, 8) * 8 + Bucket(p.spread_g, 8)};
+    g_.mix_context = std::min(kMixContexts - 1, sg);
+    const int eg = g_.Code(io, Wrap(c.g - p.g));
     c.g = static_cast<uint8_t>((p.g + eg) & 255);
-    last_eg = eg;
+    last_eg_ = eg;
     // G's miss unwrapped: what R and B share of it.
     const int dg = c.g - p.g, aeg = Bucket(std::abs(eg), kResidualBuckets), seg = (eg > 0 ? 8 : 0) + Bucket(std::abs(eg), 8);
-    const uint8_t pr = Clamp(p.g + p.rg + share_r.Of(dg));
+    const uint8_t pr = Clamp(p.g + p.rg + share_r_.Of(dg));
     const int srg = Bucket(p.spread_rg, kSpreadBuckets) + unpredicted;
-    red->context = {srg * r + aeg, srg * 16 + seg, 0, Bucket(p.spread_g, 8) * r + aeg};
-    red->mix_context = std::min(kMixContexts - 1, srg);
-    const int er = red->Code(io, Wrap(c.r - pr));
+    red_.context = {srg * kR + aeg, srg * 16 + seg, 0, Bucket(p.spread_g, 8) * kR + aeg};
+    red_.mix_context = std::min(kMixContexts - 1, srg);
+    const int er = red_.Code(io, Wrap(c.r - pr));
     c.r = static_cast<uint8_t>((pr + er) & 255);
-    const uint8_t pb = Clamp(p.g + p.bg + share_b.Of(dg));
+    const uint8_t pb = Clamp(p.g + p.bg + share_b_.Of(dg));
     const int sbg = Bucket(p.spread_bg, kSpreadBuckets) + unpredicted;
-    blue->context = {sbg * r + aeg, sbg * 16 + seg, std::min(15, std::abs(er)) * 2 + (er > 0 ? 1 : 0), Bucket(p.spread_g, 8) * r + aeg};
-    blue->mix_context = std::min(kMixContexts - 1, sbg);
-    const int eb = blue->Code(io, Wrap(c.b - pb));
+    blue_.context = {sbg * kR + aeg, sbg * 16 + seg, std::min(15, std::abs(er)) * 2 + (er > 0 ? 1 : 0), Bucket(p.spread_g, 8) * kR + aeg};
+    blue_.mix_context = std::min(kMixContexts - 1, sbg);
+    const int eb = blue_.Code(io, Wrap(c.b - pb));
     c.b = static_cast<uint8_t>((pb + eb) & 255);
-    share_r.Learn(dg, c.r - (p.g + p.rg));
-    share_b.Learn(dg, c.b - (p.g + p.bg));
-    predict.Record(i, c);
+    share_r_.Learn(dg, c.r - (p.g + p.rg));
+    share_b_.Learn(dg, c.b - (p.g + p.bg));
+    predict_.Record(i, c);
+    return c;
   }
-}
+
+  static constexpr int kS = 2 * kSpreadBuckets, kR = kResidualBuckets;
+  ChannelCoder g_{{kS, kS * 8, 1, 64}};
+  ChannelCoder red_{{kS * kR, kS * 16, 1, 8 * kR}};
+  ChannelCoder blue_{{kS * kR, kS * 16, 32, 8 * kR}};
+  Predictor predict_;
+  Share share_r_, share_b_;
+  int last_eg_ = 0;
+};
 
 struct EncodeIo {
   BinaryRangeEncoder rc;
@@ -140,17 +168,58 @@ struct DecodeIo {
 
 }  // namespace
 
-std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton, bool columns) {
-  std::vector<Rgb8> scratch(colors.begin(), colors.end());
+struct MixedEncoder::State {
+  explicit State(std::span<const uint64_t> morton) : coder(morton) {}
+  MixedCoder coder;
   EncodeIo io;
-  CodeColors(io, scratch, morton, columns);
-  return io.rc.Finish();
+};
+
+MixedEncoder::MixedEncoder(std::span<const uint64_t> morton) : state_(std::make_unique<State>(morton)) {}
+MixedEncoder::~MixedEncoder() = default;
+MixedEncoder::MixedEncoder(MixedEncoder&&) noexcept = default;
+MixedEncoder& MixedEncoder::operator=(MixedEncoder&&) noexcept = default;
+
+void MixedEncoder::Reset() {
+  state_->coder.Reset();
+  state_->io = EncodeIo{};
+}
+
+void MixedEncoder::Code(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log) {
+  state_->coder.Code(state_->io, colors, i, around, log);
+}
+
+void MixedEncoder::Replay(std::span<const Rgb8> colors, size_t i, const Predicted& known) {
+  state_->coder.Replay(state_->io, colors, i, known);
+}
+
+size_t MixedEncoder::FinishedSize() const {
+  BinaryRangeEncoder copy = state_->io.rc;
+  return copy.Finish().size();
+}
+
+std::vector<uint8_t> MixedEncoder::Finish() { return state_->io.rc.Finish(); }
+
+std::vector<uint8_t> EncodeMixed(std::span<const Rgb8> colors, std::span<const uint64_t> morton, bool columns) {
+  MixedEncoder encoder(morton);
+  if (morton.empty()) {
+    for (size_t i = 0; i < colors.size(); ++i) encoder.Code(colors, i, {});
+  } else {
+    NeighbourhoodSearch search(morton, 3, columns);
+    for (size_t i = 0; i < colors.size(); ++i) encoder.Code(colors, i, search.Next(i));
+  }
+  return encoder.Finish();
 }
 
 bool DecodeMixed(std::span<const uint8_t> coded, std::span<Rgb8> colors, std::span<const uint64_t> morton,
                  bool columns) {
   DecodeIo io{BinaryRangeDecoder(coded)};
-  CodeColors(io, colors, morton, columns);
+  auto coder = std::make_unique<MixedCoder>(morton);
+  if (morton.empty()) {
+    for (size_t i = 0; i < colors.size(); ++i) colors[i] = coder->Code(io, colors, i, {});
+  } else {
+    NeighbourhoodSearch search(morton, 3, columns);
+    for (size_t i = 0; i < colors.size(); ++i) colors[i] = coder->Code(io, colors, i, search.Next(i));
+  }
   return io.rc.consumed_exactly();
 }
 

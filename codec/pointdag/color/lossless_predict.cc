@@ -3,20 +3,6 @@
 namespace pointdag::lossless {
 namespace {
 
-constexpr int kRadius = 2, kFarRadius = 4;
-// Version 3: with fewer decoded neighbours than this within ±2, those within ±4 join them (IGN
-// 0.1 m: half its voxels have none within ±2).
-constexpr int kFewNeighbours = 4;
-// Column mode: the columns within ±2 in x and y, and within ±6 for a voxel with fewer than
-// kFewNeighbours found by then (IGN 0.1 m, colors: 113,498 bytes with ±2 alone, 112,125 with ±6
-// after, 112,633 with ±8).
-constexpr int kColumnRadius = 2, kFarColumnRadius = 6;
-
-// A column's voxel weighs as a box voxel at d² = dx² + dy² + 2 (its own column's as a face
-// neighbour, d² = 1): its height is unknown to the weights, and a box voxel the same distance off
-// in x and y is nearer. Up to kWideFar's last entry.
-int ColumnD2(int dxy2) { return dxy2 == 0 ? 1 : std::min(48, dxy2 + 2); }
-
 // Version 2, beyond ±2 for voxels with nothing nearer: max(1, 64 / d²) (d² from 9 to 48).
 constexpr Weights kFar = [] {
   Weights w{};
@@ -53,45 +39,82 @@ Prediction CellMeans::Before(size_t i) const {
   return p;
 }
 
-Predictor::Predictor(std::span<const uint64_t> morton, int version, bool columns) : version_(version) {
-  if (!morton.empty()) {
-    neighbours_.emplace(morton);
-    if (version_ >= 3) cells_.emplace(morton);
-    if (columns) columns_.emplace(morton);
-    misses_.resize(morton.size());
+Prediction Predict(std::span<const Neighbour> found, std::span<const Rgb8> colors, const Weights& weights) {
+  Prediction p;
+  int w = 0, g = 0, rg = 0, bg = 0;
+  for (const Neighbour& n : found) {
+    const Rgb8 c = colors[n.index];
+    const int wi = weights[n.d2];
+    w += wi;
+    g += wi * c.g;
+    rg += wi * (c.r - c.g);
+    bg += wi * (c.b - c.g);
   }
+  if (w == 0) return p;
+  p = {Div(g, w), Div(rg, w), Div(bg, w), 0, 0, 0, false};
+  int sg = 0, srg = 0, sbg = 0;
+  for (const Neighbour& n : found) {
+    const Rgb8 c = colors[n.index];
+    const int wi = weights[n.d2];
+    sg += wi * std::abs(c.g - p.g);
+    srg += wi * std::abs(c.r - c.g - p.rg);
+    sbg += wi * std::abs(c.b - c.g - p.bg);
+  }
+  p.spread_g = Div(sg, w);
+  p.spread_rg = Div(srg, w);
+  p.spread_bg = Div(sbg, w);
+  return p;
 }
 
-Prediction Predictor::operator()(std::span<const Rgb8> colors, size_t i) {
-  Gather& gather = gather_;  // a member: its array is not cleared per voxel
-  gather.Clear();
+Predictor::Predictor(std::span<const uint64_t> morton, int version) : morton_(morton), version_(version) {
+  misses_.resize(morton.size());
+  Reset();
+}
+
+void Predictor::Reset() {
+  if (!morton_.empty() && version_ >= 3) cells_.emplace(morton_);
+}
+
+Predicted Swapped(const Predicted& p) {
+  const auto swap = [](Prediction q) {
+    std::swap(q.rg, q.bg);
+    std::swap(q.spread_rg, q.spread_bg);
+    return q;
+  };
+  return {swap(p.chosen), swap(p.near), swap(p.wide)};
+}
+
+Prediction Predictor::operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log) {
+  const Prediction p = Compute(colors, i, around);
+  if (log != nullptr) *log = {p, near_, wide_};
+  return p;
+}
+
+Prediction Predictor::Replay(size_t i, const Predicted& known) {
+  if (cells_) cells_->Enter(i);
+  near_ = known.near, wide_ = known.wide;
+  return known.chosen;
+}
+
+Prediction Predictor::Compute(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around) {
   near_ = wide_ = Prediction{};
-  if (neighbours_) {
+  if (!morton_.empty()) {
     if (cells_) cells_->Enter(i);
-    const auto add = [&gather](size_t j, int d2) { gather.Add(j, d2); };
-    neighbours_->ForEach(i, 0, kRadius, add);
-    const bool reach = version_ >= 3 && gather.size() < kFewNeighbours;
-    if (reach) neighbours_->ForEach(i, kRadius, kFarRadius, add);
-    if (columns_) {
-      const auto add_column = [&gather](size_t j, int dxy2) { gather.Add(j, ColumnD2(dxy2)); };
-      const int box = reach ? kFarRadius : kRadius;
-      columns_->ForEach(i, -1, kColumnRadius, box, add_column);
-      if (gather.size() < kFewNeighbours) columns_->ForEach(i, kColumnRadius, kFarColumnRadius, box, add_column);
+    if (around.far) {
+      const Prediction far = Predict(around.found, colors, kFar);
+      if (!far.none) return far;
+    } else {
+      near_ = Predict(around.adjacent, colors, kNear);
+      wide_ = Predict(around.found, colors, around.reach ? kWideFar : kWide);
+      int near_miss = 0, wide_miss = 0;
+      for (const Neighbour& n : around.adjacent) {
+        near_miss += misses_[n.index][0];
+        wide_miss += misses_[n.index][1];
+      }
+      const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
+      if (!best.none) return best;
+      if (cells_) return cells_->Before(i);
     }
-    near_ = gather.Predict(colors, kNear);
-    wide_ = gather.Predict(colors, reach ? kWideFar : kWide);
-    int near_miss = 0, wide_miss = 0;
-    for (size_t k = 0; k < gather.size(); ++k) {
-      if (gather[k].second > 3) continue;
-      near_miss += misses_[gather[k].first][0];
-      wide_miss += misses_[gather[k].first][1];
-    }
-    const Prediction& best = near_.none || (!wide_.none && wide_miss <= near_miss) ? wide_ : near_;
-    if (!best.none) return best;
-    if (cells_) return cells_->Before(i);
-    neighbours_->ForEach(i, kRadius, kFarRadius, add);
-    const Prediction far = gather.Predict(colors, kFar);
-    if (!far.none) return far;
   }
   Prediction p;
   if (i > 0) {
@@ -105,7 +128,6 @@ void Predictor::Record(size_t i, const Rgb8& c) {
   if (misses_.empty()) return;
   misses_[i] = {static_cast<uint16_t>(near_.none ? 0 : Miss(near_, c)), static_cast<uint16_t>(wide_.none ? 0 : Miss(wide_, c))};
   if (cells_) cells_->Add(c);
-  if (columns_) columns_->Record(i);
 }
 
 }  // namespace pointdag::lossless

@@ -13,8 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "pointdag/color/causal_columns.h"
-#include "pointdag/color/causal_neighbours.h"
+#include "pointdag/voxelize/morton.h"
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag::lossless {
@@ -34,46 +33,33 @@ using Weights = std::array<int, 49>;
 constexpr Weights kNear = {0, 4, 2, 1};
 constexpr Weights kWide = {0, 12, 6, 4, 3, 2, 2, 0, 1, 1, 0, 0, 1};
 
-// The decoded neighbours of a voxel (index and squared distance), folded into predictions.
-class Gather {
- public:
-  void Clear() { n_ = 0; }
-  void Add(size_t j, int d2) {
-    if (n_ < items_.size()) items_[n_++] = {j, d2};
-  }
-  size_t size() const { return n_; }
-  std::pair<size_t, int> operator[](size_t k) const { return items_[k]; }
-  Prediction Predict(std::span<const Rgb8> colors, const Weights& weights) const {
-    Prediction p;
-    int w = 0, g = 0, rg = 0, bg = 0;
-    for (size_t i = 0; i < n_; ++i) {
-      const Rgb8 c = colors[items_[i].first];
-      const int wi = weights[items_[i].second];
-      w += wi;
-      g += wi * c.g;
-      rg += wi * (c.r - c.g);
-      bg += wi * (c.b - c.g);
-    }
-    if (w == 0) return p;
-    p = {Div(g, w), Div(rg, w), Div(bg, w), 0, 0, 0, false};
-    int sg = 0, srg = 0, sbg = 0;
-    for (size_t i = 0; i < n_; ++i) {
-      const Rgb8 c = colors[items_[i].first];
-      const int wi = weights[items_[i].second];
-      sg += wi * std::abs(c.g - p.g);
-      srg += wi * std::abs(c.r - c.g - p.rg);
-      sbg += wi * std::abs(c.b - c.g - p.bg);
-    }
-    p.spread_g = Div(sg, w);
-    p.spread_rg = Div(srg, w);
-    p.spread_bg = Div(sbg, w);
-    return p;
-  }
-
- private:
-  std::array<std::pair<size_t, int>, 9 * 9 * 9 - 1 + 13 * 13> items_{};  // the ±4 box, the columns within ±6
-  size_t n_ = 0;
+// A decoded voxel near the one predicted: its index and squared distance (or, for a column's, the
+// squared distance it weighs as).
+struct Neighbour {
+  uint32_t index;
+  uint32_t d2;
 };
+
+// The decoded voxels that predict a voxel (lossless_neighbourhood.h finds them): they depend on the
+// voxels alone, not on their colors.
+struct Neighbourhood {
+  std::span<const Neighbour> found;
+  std::span<const Neighbour> adjacent;  // those of `found` with d2 <= 3, the only ones kNear weighs
+  bool reach = false;  // version 3: fewer than kFewNeighbours within ±2, so those within ±4 joined
+  bool far = false;    // version 2: none within ±2; `found` holds those within ±4, to predict alone
+};
+
+// The neighbours' colors folded into a prediction, each weighing weights[d2].
+Prediction Predict(std::span<const Neighbour> found, std::span<const Rgb8> colors, const Weights& weights);
+
+// A voxel's prediction and the two weightings tried for it. Swapped: the same for the colors with
+// R and B swapped (the channel order with the same lead, lossless_transform.h), which the encoder's
+// layout trials replay instead of predicting again (the misses that choose the weighting add the
+// channels' alike, so the choice is the same).
+struct Predicted {
+  Prediction chosen, near, wide;
+};
+Predicted Swapped(const Predicted& p);
 
 inline int Miss(const Prediction& p, const Rgb8& c) {
   return std::abs(c.g - p.g) + std::abs(c.r - c.g - p.rg) + std::abs(c.b - c.g - p.bg);
@@ -127,19 +113,25 @@ class CellMeans {
 // previous color.
 class Predictor {
  public:
-  Predictor(std::span<const uint64_t> morton, int version, bool columns = false);
-  Prediction operator()(std::span<const Rgb8> colors, size_t i);
+  // `morton`: empty, or one code per color, which must outlive this.
+  Predictor(std::span<const uint64_t> morton, int version);
+  // Back to the first color, for another stream over the same voxels.
+  void Reset();
+  // `around`: voxel i's neighbourhood (empty without Morton codes). `log`: where to keep it too.
+  Prediction operator()(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around, Predicted* log = nullptr);
+  // Voxel i's prediction as `known` (by another trial, for these colors).
+  Prediction Replay(size_t i, const Predicted& known);
   // After color i is known: how far each weighting was from it.
   void Record(size_t i, const Rgb8& c);
 
  private:
+  std::span<const uint64_t> morton_;
   int version_;
-  std::optional<CausalNeighbours> neighbours_;
   std::optional<CellMeans> cells_;
-  std::optional<CausalColumns> columns_;
-  std::vector<std::array<uint16_t, 2>> misses_;
+  Prediction Compute(std::span<const Rgb8> colors, size_t i, const Neighbourhood& around);
+
+  std::vector<std::array<uint16_t, 2>> misses_;  // written for each voxel before its neighbours read it
   Prediction near_, wide_;
-  Gather gather_;
 };
 
 inline int Wrap(int v) { return ((v + 128) & 255) - 128; }
