@@ -87,6 +87,15 @@ constexpr auto kFacing = [] {
   return t;
 }();
 
+// kNibbles[mask]: bit c of the mask as bit 4c.
+constexpr auto kNibbles = [] {
+  std::array<uint32_t, 256> t{};
+  for (unsigned m = 0; m < 256; ++m) {
+    for (int c = 0; c < 8; ++c) t[m] |= ((m >> c) & 1u) << (4 * c);
+  }
+  return t;
+}();
+
 // Child c's lower diagonal neighbours on its level lie at offsets −1 on the axes of o = 6, 5, 3, 7
 // (xy, xz, yz, xyz): in the cell at parent offset o & ~c (bit 4 >> axis: −1 on that axis), child
 // c ^ o. kDiagonalFrom[p][mask]: bit c when one of them lies in the cell at offset p != 0 and is
