@@ -86,6 +86,7 @@ struct Mixers {
 template <bool kVersion5, typename Io>
 uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth,
                  bool edges, const Mixers& mix, const std::array<uint8_t, 8>& planes, unsigned group) {
+  if constexpr (kVersion5) edges = true;  // version 2's contexts, as a constant: their branches fold
   unsigned exists = 0;
   uint32_t facing = 0;
   std::array<unsigned, 3> below{};  // the masks of the lower face neighbours (0: none)
@@ -100,8 +101,8 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
     facing |= kFacing[axis][below[axis]];
   }
   const auto& sides = kSides[exists];
-  // Version 5: child c's three neighbours at −2 (bit c of the lower masks) as nibble c, as `facing`.
-  const uint32_t lower2s = kVersion5 ? kNibbles[below[0]] | kNibbles[below[1]] << 1 | kNibbles[below[2]] << 2 : 0;
+  // Version 5: child c's three neighbours at −2 (bit c of the lower masks) in byte c.
+  const uint64_t lower2s = kVersion5 ? kBitBytes[below[0]] | kBitBytes[below[1]] << 1 | kBitBytes[below[2]] << 2 : 0;
   const Around around = edges ? Surroundings<kVersion5>(lv, i) : Around{};
   const unsigned most = edges ? 1 : 3;
   unsigned m = 0;
@@ -118,7 +119,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
       }
       auto& model = models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra];
       if constexpr (kVersion5) {
-        const unsigned lower2 = (lower2s >> (4 * c)) & 7u;
+        const unsigned lower2 = (lower2s >> (8 * c)) & 7u;
         const unsigned pattern = around.pattern[c] | kPatternSelf[c][m] | lower2 << kPatternLayout.count[c];
         const unsigned apm = (((c * 8 + lower) * 8 + lower2) * 4) + extra;
         bit = mix.v5->Bit(io, model, c, m, ones > 0, exists, planes[c], kPatternBase[group][c] + pattern, around.side[c], apm,
