@@ -8,6 +8,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <vector>
@@ -290,14 +291,17 @@ inline Around Surroundings(const Level& lv, size_t i) {
                                       kDiagonalFrom[7][mask(lower_corner)]);
   if constexpr (kVersion5) {
     const std::array<uint8_t, 7> lower = {0, mask(f[4]), mask(f[2]), mask(yz[0][0]), mask(f[0]), mask(xz[0][0]), mask(xy[0][0])};
+    // Whole rows OR in, as two words (a row's entry for child c is 0 where o & c != 0).
+    std::array<uint64_t, 2> pattern{};
+    static_assert(sizeof(pattern) == sizeof(out.pattern));
 #pragma GCC unroll 6
     for (int o = 1; o < 7; ++o) {
-      const auto& from = kPatternFrom[o][kPatternCompact[o][lower[o]]];
-#pragma GCC unroll 8
-      for (int c = 0; c < 8; ++c) {
-        if ((o & c) == 0) out.pattern[c] = static_cast<uint16_t>(out.pattern[c] | from[c]);  // else from[c] is 0
-      }
+      std::array<uint64_t, 2> row;
+      std::memcpy(row.data(), kPatternFrom[o][kPatternCompact[o][lower[o]]].data(), sizeof(row));
+      pattern[0] |= row[0];
+      pattern[1] |= row[1];
     }
+    std::memcpy(out.pattern.data(), pattern.data(), sizeof(pattern));
   }
   return out;
 }
