@@ -66,6 +66,14 @@ class DecoderIo {
   BinaryRangeDecoder rc_;
 };
 
+// Bit c: byte c of v (a brick's cell c) is non-zero. Each byte's bit 7 says so, and the multiply
+// gathers those eight bits into the top byte (no two products meet, so nothing carries).
+uint8_t NonZeroBytes(uint64_t v) {
+  constexpr uint64_t kLow7 = 0x7F7F7F7F7F7F7F7Full;
+  const uint64_t high = (((v & kLow7) + kLow7) | v) & ~kLow7;
+  return static_cast<uint8_t>(((high >> 7) * 0x0102040810204080ull) >> 56);
+}
+
 // The mixers a stream's version uses: none (1, 2), version 3's and 4's, version 5's.
 struct Mixers {
   std::unique_ptr<MaskMixer> v3;
@@ -78,6 +86,7 @@ struct Mixers {
 template <bool kVersion5, typename Io>
 uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const Level& lv, size_t i, uint8_t truth,
                  bool edges, const Mixers& mix, const std::array<uint8_t, 8>& planes, unsigned group) {
+  if constexpr (kVersion5) edges = true;  // version 2's contexts, as a constant: their branches fold
   unsigned exists = 0;
   uint32_t facing = 0;
   std::array<unsigned, 3> below{};  // the masks of the lower face neighbours (0: none)
@@ -92,6 +101,8 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
     facing |= kFacing[axis][below[axis]];
   }
   const auto& sides = kSides[exists];
+  // Version 5: child c's three neighbours at −2 (bit c of the lower masks) in byte c.
+  const uint64_t lower2s = kVersion5 ? kBitBytes[below[0]] | kBitBytes[below[1]] << 1 | kBitBytes[below[2]] << 2 : 0;
   const Around around = edges ? Surroundings<kVersion5>(lv, i) : Around{};
   const unsigned most = edges ? 1 : 3;
   unsigned m = 0;
@@ -108,7 +119,7 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
       }
       auto& model = models[((ones * 8 + lower) * 27 + sides[c]) * 4 + extra];
       if constexpr (kVersion5) {
-        const unsigned lower2 = ((below[0] >> c) & 1u) | ((below[1] >> c) & 1u) << 1 | ((below[2] >> c) & 1u) << 2;
+        const unsigned lower2 = (lower2s >> (8 * c)) & 7u;
         const unsigned pattern = around.pattern[c] | kPatternSelf[c][m] | lower2 << kPatternLayout.count[c];
         const unsigned apm = (((c * 8 + lower) * 8 + lower2) * 4) + extra;
         bit = mix.v5->Bit(io, model, c, m, ones > 0, exists, planes[c], kPatternBase[group][c] + pattern, around.side[c], apm,
@@ -146,9 +157,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
     if (level < levels) return a.masks[level][id];
     if (level > levels) return static_cast<uint8_t>(slots[id >> 3] >> (8 * (id & 7)));
-    uint8_t cells = 0;
-    for (int c = 0; c < 8; ++c) cells = static_cast<uint8_t>(cells | (((slots[id] >> (8 * c)) & 0xFFu) ? 1u << c : 0u));
-    return cells;
+    return NonZeroBytes(slots[id]);
   };
   constexpr std::array<int32_t, 6> kNone = {-1, -1, -1, -1, -1, -1};
   Level cur;

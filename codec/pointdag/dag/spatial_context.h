@@ -8,6 +8,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <vector>
@@ -83,6 +84,16 @@ constexpr auto kFacing = [] {
         if (!(c & a)) t[axis][m] |= ((m >> (c | a)) & 1u) << axis << (4 * c);
       }
     }
+  }
+  return t;
+}();
+
+// kBitBytes[mask]: bit c of the mask as bit 0 of byte c, for building a per-child byte of all
+// eight children at once.
+constexpr auto kBitBytes = [] {
+  std::array<uint64_t, 256> t{};
+  for (unsigned m = 0; m < 256; ++m) {
+    for (int c = 0; c < 8; ++c) t[m] |= uint64_t{(m >> c) & 1u} << (8 * c);
   }
   return t;
 }();
@@ -236,12 +247,17 @@ inline Around Surroundings(const Level& lv, size_t i) {
       yz[a][b] = edge(2 + a, 4 + b);
     }
   }
-  Around out;
+  // Per neighbour, the children on its side, one bit each (child c = x << 2 | y << 1 | z): the
+  // bits of all eight children at once rather than per child.
+  const auto on_side = [](int32_t at, unsigned children) { return at >= 0 ? children : 0u; };
+  const unsigned along_xy = on_side(xy[0][0], 0x03) | on_side(xy[0][1], 0x0C) | on_side(xy[1][0], 0x30) | on_side(xy[1][1], 0xC0);
+  const unsigned along_xz = on_side(xz[0][0], 0x05) | on_side(xz[0][1], 0x0A) | on_side(xz[1][0], 0x50) | on_side(xz[1][1], 0xA0);
+  const unsigned along_yz = on_side(yz[0][0], 0x11) | on_side(yz[0][1], 0x22) | on_side(yz[1][0], 0x44) | on_side(yz[1][1], 0x88);
+  unsigned corners = 0;
   int32_t lower_corner = -1;
 #pragma GCC unroll 8
   for (int c = 0; c < 8; ++c) {
     const int x = (c >> 2) & 1, y = (c >> 1) & 1, z = c & 1;
-    const int edges = (xy[x][y] >= 0) + (xz[x][z] >= 0) + (yz[y][z] >= 0);
     bool corner;
     if (kVersion5 || c == 0) {
       const int32_t c1 = step(xy[x][y], 4 + z), c2 = step(xz[x][z], 2 + y), c3 = step(yz[y][z], x);
@@ -250,16 +266,23 @@ inline Around Surroundings(const Level& lv, size_t i) {
     } else {
       // Without version 5's side bits the corner decides `outer` only when exactly one edge exists,
       // and then only the step from that edge can reach it: one lookup instead of three (the
-      // same bit: with no edge the step reads the sentinel row, with two `near` is 2 already).
+      // same bit: with no edge the step reads the sentinel row, with two `outer` is set already).
       const int32_t via = xy[x][y] >= 0 ? step(xy[x][y], 4 + z) : xz[x][z] >= 0 ? step(xz[x][z], 2 + y) : step(yz[y][z], x);
       corner = via >= 0;
     }
-    const int near = edges + corner;
-    out.outer = static_cast<uint8_t>(out.outer | (near >= 2 ? 1u << c : 0u));
-    if constexpr (kVersion5) {
-      out.side[c] = static_cast<uint8_t>((f[x] >= 0) | (f[2 + y] >= 0) << 1 | (f[4 + z] >= 0) << 2 | (xy[x][y] >= 0) << 3 |
-                                         (xz[x][z] >= 0) << 4 | (yz[y][z] >= 0) << 5 | corner << 6);
-    }
+    corners |= corner ? 1u << c : 0u;
+  }
+  Around out;
+  // At least two of the three edges and the corner.
+  out.outer = static_cast<uint8_t>((along_xy & (along_xz | along_yz | corners)) | (along_xz & (along_yz | corners)) |
+                                   (along_yz & corners));
+  if constexpr (kVersion5) {
+    const unsigned faces_x = on_side(f[0], 0x0F) | on_side(f[1], 0xF0), faces_y = on_side(f[2], 0x33) | on_side(f[3], 0xCC),
+                   faces_z = on_side(f[4], 0x55) | on_side(f[5], 0xAA);
+    const uint64_t side = kBitBytes[faces_x] | kBitBytes[faces_y] << 1 | kBitBytes[faces_z] << 2 | kBitBytes[along_xy] << 3 |
+                          kBitBytes[along_xz] << 4 | kBitBytes[along_yz] << 5 | kBitBytes[corners] << 6;
+#pragma GCC unroll 8
+    for (int c = 0; c < 8; ++c) out.side[c] = static_cast<uint8_t>(side >> (8 * c));
   }
   const auto mask = [&](int32_t at) { return lv.mask[at < 0 ? none : at]; };
   out.diagonal = static_cast<uint8_t>(kDiagonalFrom[4][mask(f[0])] | kDiagonalFrom[2][mask(f[2])] |
@@ -268,14 +291,17 @@ inline Around Surroundings(const Level& lv, size_t i) {
                                       kDiagonalFrom[7][mask(lower_corner)]);
   if constexpr (kVersion5) {
     const std::array<uint8_t, 7> lower = {0, mask(f[4]), mask(f[2]), mask(yz[0][0]), mask(f[0]), mask(xz[0][0]), mask(xy[0][0])};
+    // Whole rows OR in, as two words (a row's entry for child c is 0 where o & c != 0).
+    std::array<uint64_t, 2> pattern{};
+    static_assert(sizeof(pattern) == sizeof(out.pattern));
 #pragma GCC unroll 6
     for (int o = 1; o < 7; ++o) {
-      const auto& from = kPatternFrom[o][kPatternCompact[o][lower[o]]];
-#pragma GCC unroll 8
-      for (int c = 0; c < 8; ++c) {
-        if ((o & c) == 0) out.pattern[c] = static_cast<uint16_t>(out.pattern[c] | from[c]);  // else from[c] is 0
-      }
+      std::array<uint64_t, 2> row;
+      std::memcpy(row.data(), kPatternFrom[o][kPatternCompact[o][lower[o]]].data(), sizeof(row));
+      pattern[0] |= row[0];
+      pattern[1] |= row[1];
     }
+    std::memcpy(out.pattern.data(), pattern.data(), sizeof(pattern));
   }
   return out;
 }

@@ -222,7 +222,7 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
   } else {
     points.reserve(static_cast<size_t>(survey.points));
   }
-  const uint32_t max_cell = (uint32_t{1} << grid.depth) - 1;
+  const double max_cell = static_cast<double>((uint32_t{1} << grid.depth) - 1);
   const double inv_size = 1.0 / grid.voxel_size;
   ASSIGN_OR_RETURN(gpu::VulkanContext* const device, VoxelizeDevice());
   uint64_t read = 0;
@@ -235,8 +235,10 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
     cells.resize(n);
     for (size_t i = 0; i < n; ++i) {
       for (int axis = 0; axis < 3; ++axis) {
-        const double c = std::floor((batch.xyz[i][axis] - grid.origin[axis]) * inv_size);
-        cells[i][axis] = static_cast<uint32_t>(std::clamp(c, 0.0, static_cast<double>(max_cell)));
+        // The cast truncates, which is the floor on [0, max_cell], and the clamp sends the rest to
+        // the ends as the floor did (std::floor without SSE4.1 is a dozen instructions per axis).
+        const double c = (batch.xyz[i][axis] - grid.origin[axis]) * inv_size;
+        cells[i][axis] = static_cast<uint32_t>(std::clamp(c, 0.0, max_cell));
       }
     }
     if (device) {
