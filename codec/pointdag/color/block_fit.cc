@@ -45,6 +45,18 @@ class RoundDivider {
   double inverse_;
 };
 
+// sum over n colors of (c - a)^T M (c - a), M symmetric, from their sums s and product sums ss (Sums'
+// order): sum_jk M_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k) = sum_jk M_jk ss_jk + a^T M (n a - 2 s),
+// the same integer for 18 products instead of 45. Inlined, so that M's entries are constants.
+__attribute__((always_inline)) inline int64_t ErrorAbout(const int64_t s[3], const int64_t ss[6], int64_t n, const int64_t a[3],
+                                                         const int32_t (&metric)[3][3]) {
+  int64_t sse = metric[0][0] * ss[0] + metric[1][1] * ss[1] + metric[2][2] * ss[2] +
+                2 * (metric[0][1] * ss[3] + metric[0][2] * ss[4] + metric[1][2] * ss[5]);
+  const int64_t t[3] = {n * a[0] - 2 * s[0], n * a[1] - 2 * s[1], n * a[2] - 2 * s[2]};
+  for (int j = 0; j < 3; ++j) sse += a[j] * (metric[j][0] * t[0] + metric[j][1] * t[1] + metric[j][2] * t[2]);
+  return sse;
+}
+
 // Arithmetic shift right until every component is below 2^kAxisBits in magnitude.
 void Shrink(int64_t v[3]) {
   const uint64_t largest = static_cast<uint64_t>(std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}));
@@ -56,15 +68,16 @@ void Shrink(int64_t v[3]) {
 // 1 / (2 (B - A)^T Q (B - A)) with a nudge that keeps the floor exact (the numerator is below 2^34 and
 // exact in a double, the denominator below 2^30, so a quotient that is not an integer is at least 2^-30
 // from one, and the product's error, the quotient being below 16, is below 2^-47); Interpolate's once
-// per weight, the palette as arrays so that the AVX2 loops gather from it.
+// per weight, the palette as arrays so that the AVX2 loops gather from it. The palette's error may be
+// taken in another metric (kChromaWeights), whose terms are signed: they are exact modulo 2^32.
 struct Line {
   int32_t a[3];     // endpoint A
   int32_t q[3];     // Q (B - A)
   int32_t len2;     // (B - A)^T Q (B - A)
   int32_t m;        // 2^bits - 1
   double inverse;   // 1 / (2 len2), 0 if len2 is 0
-  int32_t twice_qp[3][16];  // 2 Q p for p = Interpolate(e, w), per w
-  uint32_t norm[16];        // p^T Q p
+  int32_t twice_qp[3][16];  // 2 M p for p = Interpolate(e, w), per w, M the palette's metric
+  uint32_t norm[16];        // p^T M p
 
   // (c - A)^T Q (B - A)
   int32_t Dot(int32_t r, int32_t g, int32_t b) const { return (r - a[0]) * q[0] + (g - a[1]) * q[1] + (b - a[2]) * q[2]; }
@@ -80,7 +93,7 @@ struct Line {
 };
 
 template <int kBits>
-Line MakeLine(const Endpoints& e) {
+Line MakeLine(const Endpoints& e, const int32_t (&metric)[3][3] = kErrorWeights) {
   constexpr uint32_t kM = (1u << kBits) - 1;
   Line line;  // palette entries past m stay unset: no weight reaches them
   const std::array<int32_t, 3> q = WeightedAxis(e);
@@ -94,7 +107,7 @@ Line MakeLine(const Endpoints& e) {
     const int32_t p[3] = {mix(e.a.r, e.b.r, w), mix(e.a.g, e.b.g, w), mix(e.a.b, e.b.b, w)};
     line.norm[w] = 0;
     for (int j = 0; j < 3; ++j) {
-      const int32_t qp = kErrorWeights[j][0] * p[0] + kErrorWeights[j][1] * p[1] + kErrorWeights[j][2] * p[2];
+      const int32_t qp = metric[j][0] * p[0] + metric[j][1] * p[1] + metric[j][2] * p[2];
       line.twice_qp[j][w] = 2 * qp;
       line.norm[w] += static_cast<uint32_t>(p[j] * qp);
     }
@@ -209,6 +222,25 @@ POINTDAG_AVX2 uint64_t ErrorAvx2(const Run& run, const Line& line, uint64_t stop
   return sse;
 }
 
+// ErrorScalar and ErrorAvx2 in a signed metric (the run's norms and the line's palette in it), whole runs.
+int64_t SignedErrorScalar(const Run& run, const Line& line) {
+  int64_t e = 0;
+  for (uint32_t i = 0; i < run.length; ++i) {
+    const Rgb8 c = run.colors[i];
+    e += static_cast<int32_t>(line.Error(c.r, c.g, c.b, run.norms[i], line.Weight(line.Dot(c.r, c.g, c.b))));
+  }
+  return e;
+}
+
+POINTDAG_AVX2 int64_t SignedErrorAvx2(const Run& run, const Line& line) {
+  int64_t e = 0;
+  uint32_t unused[kChunk];
+  for (uint32_t begin = 0; begin < run.length; begin += kChunk) {
+    e += static_cast<int32_t>(WeighChunk(run, begin, std::min(kChunk, run.length - begin), line, unused).sse);
+  }
+  return e;
+}
+
 // The lowest and highest projection c^T qa of a run's colors.
 std::pair<int32_t, int32_t> ExtentScalar(const Run& run, const int32_t qa[3]) {
   int32_t lowest = INT32_MAX, highest = INT32_MIN;
@@ -268,6 +300,14 @@ BlockFit FitWeights(const Run& run, const int64_t sums[3], const Endpoints& ends
   return best;
 }
 
+// BlockFitter::ChromaError of a run whose norms are c^T C c (C = kChromaWeights), for wider blocks:
+// ChooseWeight by the fitter's projection, the palette's error in C.
+template <int kBits>
+int64_t ChromaOfRun(const Run& run, const Endpoints& ends) {
+  const Line line = MakeLine<kBits>(ends, kChromaWeights);
+  return run.r ? SignedErrorAvx2(run, line) : SignedErrorScalar(run, line);
+}
+
 }  // namespace
 
 bool BlockFitter::UseAvx2() {
@@ -280,7 +320,11 @@ bool BlockFitter::UseAvx2() {
 }
 
 BlockFitter::BlockFitter(std::span<const Rgb8> colors)
-    : colors_(colors), prefix_(colors.size() + 1), norms_(colors.size() + kChunk), avx2_(UseAvx2()) {
+    : colors_(colors),
+      prefix_(colors.size() + 1),
+      norms_(colors.size() + kChunk),
+      chroma_norms_(colors.size() + kChunk),
+      avx2_(UseAvx2()) {
   prefix_[0].fill(0);
   if (avx2_) {
     for (auto& plane : planes_) plane.resize(colors.size() + kChunk);
@@ -290,6 +334,10 @@ BlockFitter::BlockFitter(std::span<const Rgb8> colors)
     const std::array<uint32_t, 9> add = {r, g, b, r * r, g * g, b * b, r * g, r * b, g * b};
     for (int k = 0; k < 9; ++k) prefix_[i + 1][k] = prefix_[i][k] + add[k];
     norms_[i] = BlockError(colors[i], Rgb8{0, 0, 0});
+    const int32_t c[3] = {int32_t(r), int32_t(g), int32_t(b)};
+    uint32_t chroma = 0;
+    for (int j = 0; j < 3; ++j) chroma += static_cast<uint32_t>(c[j] * (kChromaWeights[j][0] * c[0] + kChromaWeights[j][1] * c[1] + kChromaWeights[j][2] * c[2]));
+    chroma_norms_[i] = chroma;
     if (avx2_) planes_[0][i] = r, planes_[1][i] = g, planes_[2][i] = b;
   }
 }
@@ -304,27 +352,22 @@ BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
 BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above) const {
   const int64_t n = length;
   const Sums sums = RangeSums(begin, begin + length);
+  // One color for the whole block (0 bits, or all colors alike): the mean, whose error follows from the sums alone.
+  const auto mean = [&]() -> BlockFit {
+    int64_t a[3];
+    const RoundDivider divide(n);
+    for (int k = 0; k < 3; ++k) a[k] = divide(sums.s[k]);  // a mean of 0..255: never clamped
+    const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
+    return {{c, c}, static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kErrorWeights))};
+  };
+  if (bits == 0) return mean();
   // Covariance scaled by n^2: M[j][k] = n * sum(c_j c_k) - sum(c_j) sum(c_k).
   int64_t cov[3][3];
   for (int j = 0; j < 3; ++j) {
     for (int k = 0; k < 3; ++k) cov[j][k] = n * sums.ss[kPair[j][k]] - sums.s[j] * sums.s[k];
   }
   const int widest = cov[0][0] >= cov[1][1] ? (cov[0][0] >= cov[2][2] ? 0 : 2) : (cov[1][1] >= cov[2][2] ? 1 : 2);
-  if (bits == 0 || cov[widest][widest] == 0) {
-    // One color for the whole block: the mean, whose error follows from the sums alone:
-    // sum over colors of (c - a)^T Q (c - a) = sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k).
-    int64_t a[3];
-    const RoundDivider divide(n);
-    for (int k = 0; k < 3; ++k) a[k] = divide(sums.s[k]);  // a mean of 0..255: never clamped
-    int64_t sse = 0;
-    for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 3; ++k) {
-        sse += kErrorWeights[j][k] * (sums.ss[kPair[j][k]] - a[j] * sums.s[k] - a[k] * sums.s[j] + n * a[j] * a[k]);
-      }
-    }
-    const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
-    return {{c, c}, static_cast<uint64_t>(sse)};
-  }
+  if (cov[widest][widest] == 0) return mean();
   // Principal axis in BlockError's metric (that of the colors' covariance with Q: v <- C Q v, the
   // RGB image of the principal axis of L^T C L, Q = L L^T) by power iteration, starting from the
   // widest channel's column. Q v is shrunk too, so that C (Q v) stays below 2^57.
@@ -364,6 +407,25 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     case 3: return FitWeights<3>(run, sums.s, ends, give_up_above);
     default: return FitWeights<4>(run, sums.s, ends, give_up_above);
   }
+}
+
+uint64_t BlockFitter::ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const {
+  int64_t e;
+  if (bits == 0 || ends.a == ends.b) {
+    const Sums sums = RangeSums(begin, begin + length);
+    const int64_t a[3] = {ends.a.r, ends.a.g, ends.a.b};
+    e = ErrorAbout(sums.s, sums.ss, length, a, kChromaWeights);
+  } else {
+    const auto plane = [&](int k) { return avx2_ ? planes_[k].data() + begin : nullptr; };
+    const Run run{colors_.data() + begin, plane(0), plane(1), plane(2), chroma_norms_.data() + begin, length};
+    switch (bits) {
+      case 1: e = ChromaOfRun<1>(run, ends); break;
+      case 2: e = ChromaOfRun<2>(run, ends); break;
+      case 3: e = ChromaOfRun<3>(run, ends); break;
+      default: e = ChromaOfRun<4>(run, ends); break;
+    }
+  }
+  return static_cast<uint64_t>(std::max<int64_t>(e, 0));
 }
 
 }  // namespace pointdag
