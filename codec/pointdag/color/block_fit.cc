@@ -25,19 +25,28 @@ uint8_t Clamp255(int64_t v) { return static_cast<uint8_t>(std::clamp<int64_t>(v,
 // a / b rounded half up (floor((2a + b) / 2b)), clamped to 0..255, for several a over one b > 0.
 // Without a 64-bit division (tens of cycles, a dozen per fit): the quotient from a double reciprocal
 // is within 1 of the floor wherever the clamp does not decide, and one integer step corrects it.
-// 257 (2b) stays below 2^62 for every caller.
+// The floor of the clamped quotient x is that of x + 1, >= 0, truncated, less 1: within 1 as well, and
+// cheaper than std::floor without SSE4.1. 257 (2b) stays below 2^62 for every caller.
 class RoundDivider {
  public:
   explicit RoundDivider(int64_t b) : b_(b), inverse_(1.0 / double(2 * b)) {}
   uint8_t operator()(int64_t a) const {
     const int64_t num = 2 * a + b_, den = 2 * b_;
-    int64_t q = static_cast<int64_t>(std::clamp(std::floor(double(num) * inverse_), -1.0, 256.0));
+    int64_t q = static_cast<int64_t>(std::clamp(double(num) * inverse_, -1.0, 256.0) + 1.0) - 1;
     if (q < 256 && (q + 1) * den <= num) {
       ++q;
     } else if (q > -1 && q * den > num) {
       --q;
     }
     return Clamp255(q);
+  }
+  // The same for 0 <= a <= 255 b (a mean): the quotient is never clamped (0-bit fits, most of them).
+  uint8_t Mean(int64_t a) const {
+    const int64_t num = 2 * a + b_, den = 2 * b_;
+    int64_t q = static_cast<int64_t>(double(num) * inverse_);
+    q += (q + 1) * den <= num;
+    q -= q * den > num;
+    return static_cast<uint8_t>(q);
   }
 
  private:
@@ -329,20 +338,23 @@ BlockFitter::BlockFitter(std::span<const Rgb8> colors)
   if (avx2_) {
     for (auto& plane : planes_) plane.resize(colors.size() + kChunk);
   }
+  // c^T M c from c's products (the sums' order), modulo 2^32: BlockError against black for Q.
+  const auto norm = [](const std::array<uint32_t, 9>& p, const int32_t (&m)[3][3]) {
+    return static_cast<uint32_t>(m[0][0] * p[3] + m[1][1] * p[4] + m[2][2] * p[5] + 2 * (m[0][1] * p[6] + m[0][2] * p[7] + m[1][2] * p[8]));
+  };
+  std::array<uint32_t, 9> sums{};
   for (size_t i = 0; i < colors.size(); ++i) {
     const uint32_t r = colors[i].r, g = colors[i].g, b = colors[i].b;
     const std::array<uint32_t, 9> add = {r, g, b, r * r, g * g, b * b, r * g, r * b, g * b};
-    for (int k = 0; k < 9; ++k) prefix_[i + 1][k] = prefix_[i][k] + add[k];
-    norms_[i] = BlockError(colors[i], Rgb8{0, 0, 0});
-    const int32_t c[3] = {int32_t(r), int32_t(g), int32_t(b)};
-    uint32_t chroma = 0;
-    for (int j = 0; j < 3; ++j) chroma += static_cast<uint32_t>(c[j] * (kChromaWeights[j][0] * c[0] + kChromaWeights[j][1] * c[1] + kChromaWeights[j][2] * c[2]));
-    chroma_norms_[i] = chroma;
+    for (int k = 0; k < 9; ++k) sums[k] += add[k];
+    prefix_[i + 1] = sums;
+    norms_[i] = norm(add, kErrorWeights);
+    chroma_norms_[i] = norm(add, kChromaWeights);
     if (avx2_) planes_[0][i] = r, planes_[1][i] = g, planes_[2][i] = b;
   }
 }
 
-BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
+inline BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
   Sums out;
   for (int k = 0; k < 3; ++k) out.s[k] = int64_t{prefix_[end][k]} - prefix_[begin][k];
   for (int k = 0; k < 6; ++k) out.ss[k] = int64_t{prefix_[end][3 + k]} - prefix_[begin][3 + k];
@@ -354,10 +366,9 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
   const Sums sums = RangeSums(begin, begin + length);
   // One color for the whole block (0 bits, or all colors alike): the mean, whose error follows from the sums alone.
   const auto mean = [&]() -> BlockFit {
-    int64_t a[3];
     const RoundDivider divide(n);
-    for (int k = 0; k < 3; ++k) a[k] = divide(sums.s[k]);  // a mean of 0..255: never clamped
-    const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
+    const Rgb8 c{divide.Mean(sums.s[0]), divide.Mean(sums.s[1]), divide.Mean(sums.s[2])};
+    const int64_t a[3] = {c.r, c.g, c.b};
     return {{c, c}, static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kErrorWeights))};
   };
   if (bits == 0) return mean();
