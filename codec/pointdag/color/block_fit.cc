@@ -370,6 +370,8 @@ inline BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) co
 }
 
 BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above) const {
+  // A leaf (the tree fits every color alone at every width): the mean path's result, without the sums.
+  if (length == 1) return {{colors_[begin], colors_[begin]}, 0};
   const int64_t n = length;
   const Sums sums = RangeSums(begin, begin + length);
   // One color for the whole block (0 bits, or all colors alike): the mean, whose error follows from the sums alone.
@@ -429,6 +431,7 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
 }
 
 uint64_t BlockFitter::ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const {
+  if (length == 1 && ends.a == ends.b && ends.a == colors_[begin]) return 0;  // a leaf as fitted: exact
   int64_t e;
   if (bits == 0 || ends.a == ends.b) {
     const Sums sums = RangeSums(begin, begin + length);
