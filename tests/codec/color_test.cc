@@ -75,6 +75,30 @@ TEST(BlockFit, ErrorIsTheReconstructionsAndRangesAreIndependent) {
   }
 }
 
+// ChromaError is the per-color sum it stands for (ChooseWeight, Interpolate, kChromaWeights), for
+// fitted and arbitrary endpoints (A = B included) and lengths off the AVX2 chunk.
+TEST(BlockFit, ChromaErrorIsThePerColorSum) {
+  std::mt19937 rng(11);
+  std::vector<Rgb8> colors(300);
+  for (Rgb8& c : colors) c = {uint8_t(rng()), uint8_t(rng() % 64), uint8_t(100 + rng() % 32)};
+  const BlockFitter fitter(colors);
+  for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
+    for (const uint32_t length : {1u, 7u, 9u, 200u}) {
+      const Endpoints fitted = fitter.Fit(40, length, bits).ends;
+      for (const Endpoints& ends : {fitted, Endpoints{{250, 3, 7}, {2, 60, 131}}, Endpoints{{9, 9, 200}, {9, 9, 200}}}) {
+        int64_t sum = 0;
+        for (uint32_t i = 40; i < 40 + length; ++i) {
+          const Rgb8 p = Interpolate(ends, ChooseWeight(colors[i], ends, bits), bits);
+          const int32_t d[3] = {colors[i].r - p.r, colors[i].g - p.g, colors[i].b - p.b};
+          for (int j = 0; j < 3; ++j) sum += d[j] * (kChromaWeights[j][0] * d[0] + kChromaWeights[j][1] * d[1] + kChromaWeights[j][2] * d[2]);
+        }
+        EXPECT_EQ(fitter.ChromaError(40, length, bits, ends), static_cast<uint64_t>(std::max<int64_t>(sum, 0)))
+            << bits << " bits, length " << length;
+      }
+    }
+  }
+}
+
 struct LayoutCase {
   BlockLayout layout;
   size_t n;

@@ -41,26 +41,12 @@ const BlockFit& FitOf(const BlockFitter& fitter, Candidate& c, int bits) {
 // different hue where it saved bits: lion and the milk carton lost 0.8-2.2 dB of RGB PSNR at equal
 // PSNR-Y; 6:5:5 gives most of it back for 2-9 % more bits (6:9:9 put autzen at 42 dB above RAHT).
 // As gpu/shaders/block_common.glsl (WeighedError).
-constexpr int32_t kChromaWeights[3][3] = {{135, -94, -41}, {-94, 182, -88}, {-41, -88, 129}};
 constexpr uint64_t kChromaTimes = 4;
 
-uint64_t ChromaError(std::span<const Rgb8> colors, const Candidate& c, int bits) {
-  const Endpoints ends = c.fit->ends;  // a local copy: its axis is computed once, not per color
-  std::array<Rgb8, 1 << kMaxWeightBits> palette;  // Interpolate divides by a run-time 2^bits - 1
-  for (uint32_t w = 0; w < (1u << bits); ++w) palette[w] = Interpolate(ends, w, bits);
-  int64_t e = 0;
-  for (uint32_t i = c.start; i < c.start + c.length; ++i) {
-    const Rgb8 p = palette[ChooseWeight(colors[i], ends, bits)];
-    const int32_t d[3] = {colors[i].r - p.r, colors[i].g - p.g, colors[i].b - p.b};
-    for (int j = 0; j < 3; ++j) e += d[j] * (kChromaWeights[j][0] * d[0] + kChromaWeights[j][1] * d[1] + kChromaWeights[j][2] * d[2]);
-  }
-  return static_cast<uint64_t>(std::max<int64_t>(e, 0));
-}
-
-uint64_t WeighedError(const BlockFitter& fitter, std::span<const Rgb8> colors, Candidate& c, int bits) {
-  const uint64_t sse = FitOf(fitter, c, bits).sse;
-  if (!c.chroma) c.chroma = ChromaError(colors, c, bits);
-  return sse + kChromaTimes * *c.chroma;
+uint64_t WeighedError(const BlockFitter& fitter, Candidate& c, int bits) {
+  const BlockFit& fit = FitOf(fitter, c, bits);
+  if (!c.chroma) c.chroma = fitter.ChromaError(c.start, c.length, bits, fit.ends);
+  return fit.sse + kChromaTimes * *c.chroma;
 }
 
 // Fixed rate: a block passes when its mean error per channel, sse / (3 length) with sse the
@@ -78,11 +64,11 @@ struct Threshold {
 // limit(block, neighbour); a block merges at most once per pass; passes repeat until one merges
 // nothing. A pair that failed is not fitted again while both blocks stay as they are. (Trying the
 // left neighbour as well, as IIA does, never changes anything here: a block's left neighbour is
-// unmerged only when their merge has just failed.) Where `chroma_colors` are given (variable rate),
-// the merged block's WeighedError must be within the limit as well.
+// unmerged only when their merge has just failed.) Where `weighed` (variable rate), the merged
+// block's WeighedError must be within the limit as well.
 template <typename Limit>
 std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candidate> blocks, int bits, Limit limit_of,
-                                   std::span<const Rgb8> chroma_colors = {}) {
+                                   bool weighed = false) {
   for (bool merged_any = true; merged_any;) {
     merged_any = false;
     std::vector<Candidate> out;
@@ -93,7 +79,7 @@ std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candid
         const uint64_t limit = limit_of(blocks[i], blocks[i + 1]);
         const BlockFit fit = fitter.Fit(blocks[i].start, length, bits, limit);
         Candidate merged{blocks[i].start, length, fit};
-        if (fit.sse <= limit && (chroma_colors.empty() || WeighedError(fitter, chroma_colors, merged, bits) <= limit)) {
+        if (fit.sse <= limit && (!weighed || WeighedError(fitter, merged, bits) <= limit)) {
           out.push_back(std::move(merged));
           merged_any = true;
           ++i;
@@ -140,8 +126,7 @@ constexpr int kFirstMergedBits = 2;
 // keeps a block where its error plus its bits, both in BlockError units, cost less than its
 // children's (ties: the children, fewer bits each). Lion, guanyin, autzen 3-12 % smaller at equal
 // PSNR-Y than a tree whose every block met the threshold, cut by bits alone (docs/benchmarks.md).
-std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, std::span<const Rgb8> colors, Threshold threshold) {
-  const uint32_t count = static_cast<uint32_t>(colors.size());
+std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32_t count, Threshold threshold) {
   std::vector<std::vector<Candidate>> levels;
   for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
     std::vector<Candidate> start;  // the leaves, or the previous level's blocks to be refitted with more bits
@@ -157,8 +142,8 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, std::s
     }
     const uint64_t saved = threshold.scaled * (kHeaderTenths + (bits ? kSecondEndTenths : 0)) / kTenthsPerSse;
     levels.push_back(MergePasses(fitter, std::move(start), bits, [&](Candidate& a, Candidate& b) {
-      return WeighedError(fitter, colors, a, bits) + WeighedError(fitter, colors, b, bits) + saved;
-    }, colors));
+      return WeighedError(fitter, a, bits) + WeighedError(fitter, b, bits) + saved;
+    }, true));
   }
   // Cut bottom-up: best[level][k] is the cheapest way to code block k of that level.
   struct Best {
@@ -177,7 +162,7 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, std::s
         }
       }
       const int bits = static_cast<int>(level);
-      const uint64_t own = kTenthsPerSse * WeighedError(fitter, colors, c, bits) + threshold.scaled * RateTenths(c.length, bits);
+      const uint64_t own = kTenthsPerSse * WeighedError(fitter, c, bits) + threshold.scaled * RateTenths(c.length, bits);
       best[level].push_back(own < children ? Best{own, true} : Best{children, false});
     }
   }
@@ -209,7 +194,7 @@ std::vector<ColorBlock> EncodeBlocksOnCpu(std::span<const Rgb8> colors, BlockLay
     const uint32_t count = static_cast<uint32_t>(std::min<size_t>(colors.size() - begin, kMacroBlockColors));
     const BlockFitter fitter(colors.subspan(begin, count));
     if (layout == BlockLayout::kVariableRate) {
-      per_macro[m] = VariableRateMacroBlock(fitter, colors.subspan(begin, count), threshold);
+      per_macro[m] = VariableRateMacroBlock(fitter, count, threshold);
     } else {
       const auto limit = [&](const Candidate& a, const Candidate& b) { return threshold.MaxSse(a.length + b.length); };
       for (Candidate& c : MergePasses(fitter, Singletons(count), kFixedRateBits, limit)) {

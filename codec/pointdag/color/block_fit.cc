@@ -25,13 +25,14 @@ uint8_t Clamp255(int64_t v) { return static_cast<uint8_t>(std::clamp<int64_t>(v,
 // a / b rounded half up (floor((2a + b) / 2b)), clamped to 0..255, for several a over one b > 0.
 // Without a 64-bit division (tens of cycles, a dozen per fit): the quotient from a double reciprocal
 // is within 1 of the floor wherever the clamp does not decide, and one integer step corrects it.
-// 257 (2b) stays below 2^62 for every caller.
+// The floor of the clamped quotient x is that of x + 1, >= 0, truncated, less 1: within 1 as well, and
+// cheaper than std::floor without SSE4.1. 257 (2b) stays below 2^62 for every caller.
 class RoundDivider {
  public:
   explicit RoundDivider(int64_t b) : b_(b), inverse_(1.0 / double(2 * b)) {}
   uint8_t operator()(int64_t a) const {
     const int64_t num = 2 * a + b_, den = 2 * b_;
-    int64_t q = static_cast<int64_t>(std::clamp(std::floor(double(num) * inverse_), -1.0, 256.0));
+    int64_t q = static_cast<int64_t>(std::clamp(double(num) * inverse_, -1.0, 256.0) + 1.0) - 1;
     if (q < 256 && (q + 1) * den <= num) {
       ++q;
     } else if (q > -1 && q * den > num) {
@@ -39,11 +40,31 @@ class RoundDivider {
     }
     return Clamp255(q);
   }
+  // The same for 0 <= a <= 255 b (a mean): the quotient is never clamped (0-bit fits, most of them).
+  uint8_t Mean(int64_t a) const {
+    const int64_t num = 2 * a + b_, den = 2 * b_;
+    int64_t q = static_cast<int64_t>(double(num) * inverse_);
+    q += (q + 1) * den <= num;
+    q -= q * den > num;
+    return static_cast<uint8_t>(q);
+  }
 
  private:
   int64_t b_;
   double inverse_;
 };
+
+// sum over n colors of (c - a)^T M (c - a), M symmetric, from their sums s and product sums ss (Sums'
+// order): sum_jk M_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k) = sum_jk M_jk ss_jk + a^T M (n a - 2 s),
+// the same integer for 18 products instead of 45. Inlined, so that M's entries are constants.
+__attribute__((always_inline)) inline int64_t ErrorAbout(const int64_t s[3], const int64_t ss[6], int64_t n, const int64_t a[3],
+                                                         const int32_t (&metric)[3][3]) {
+  int64_t sse = metric[0][0] * ss[0] + metric[1][1] * ss[1] + metric[2][2] * ss[2] +
+                2 * (metric[0][1] * ss[3] + metric[0][2] * ss[4] + metric[1][2] * ss[5]);
+  const int64_t t[3] = {n * a[0] - 2 * s[0], n * a[1] - 2 * s[1], n * a[2] - 2 * s[2]};
+  for (int j = 0; j < 3; ++j) sse += a[j] * (metric[j][0] * t[0] + metric[j][1] * t[1] + metric[j][2] * t[2]);
+  return sse;
+}
 
 // Arithmetic shift right until every component is below 2^kAxisBits in magnitude.
 void Shrink(int64_t v[3]) {
@@ -56,15 +77,16 @@ void Shrink(int64_t v[3]) {
 // 1 / (2 (B - A)^T Q (B - A)) with a nudge that keeps the floor exact (the numerator is below 2^34 and
 // exact in a double, the denominator below 2^30, so a quotient that is not an integer is at least 2^-30
 // from one, and the product's error, the quotient being below 16, is below 2^-47); Interpolate's once
-// per weight, the palette as arrays so that the AVX2 loops gather from it.
+// per weight, the palette as arrays so that the AVX2 loops gather from it. The palette's error may be
+// taken in another metric (kChromaWeights), whose terms are signed: they are exact modulo 2^32.
 struct Line {
   int32_t a[3];     // endpoint A
   int32_t q[3];     // Q (B - A)
   int32_t len2;     // (B - A)^T Q (B - A)
   int32_t m;        // 2^bits - 1
   double inverse;   // 1 / (2 len2), 0 if len2 is 0
-  int32_t twice_qp[3][16];  // 2 Q p for p = Interpolate(e, w), per w
-  uint32_t norm[16];        // p^T Q p
+  int32_t twice_qp[3][16];  // 2 M p for p = Interpolate(e, w), per w, M the palette's metric
+  uint32_t norm[16];        // p^T M p
 
   // (c - A)^T Q (B - A)
   int32_t Dot(int32_t r, int32_t g, int32_t b) const { return (r - a[0]) * q[0] + (g - a[1]) * q[1] + (b - a[2]) * q[2]; }
@@ -80,7 +102,7 @@ struct Line {
 };
 
 template <int kBits>
-Line MakeLine(const Endpoints& e) {
+Line MakeLine(const Endpoints& e, const int32_t (&metric)[3][3] = kErrorWeights) {
   constexpr uint32_t kM = (1u << kBits) - 1;
   Line line;  // palette entries past m stay unset: no weight reaches them
   const std::array<int32_t, 3> q = WeightedAxis(e);
@@ -94,7 +116,7 @@ Line MakeLine(const Endpoints& e) {
     const int32_t p[3] = {mix(e.a.r, e.b.r, w), mix(e.a.g, e.b.g, w), mix(e.a.b, e.b.b, w)};
     line.norm[w] = 0;
     for (int j = 0; j < 3; ++j) {
-      const int32_t qp = kErrorWeights[j][0] * p[0] + kErrorWeights[j][1] * p[1] + kErrorWeights[j][2] * p[2];
+      const int32_t qp = metric[j][0] * p[0] + metric[j][1] * p[1] + metric[j][2] * p[2];
       line.twice_qp[j][w] = 2 * qp;
       line.norm[w] += static_cast<uint32_t>(p[j] * qp);
     }
@@ -209,6 +231,25 @@ POINTDAG_AVX2 uint64_t ErrorAvx2(const Run& run, const Line& line, uint64_t stop
   return sse;
 }
 
+// ErrorScalar and ErrorAvx2 in a signed metric (the run's norms and the line's palette in it), whole runs.
+int64_t SignedErrorScalar(const Run& run, const Line& line) {
+  int64_t e = 0;
+  for (uint32_t i = 0; i < run.length; ++i) {
+    const Rgb8 c = run.colors[i];
+    e += static_cast<int32_t>(line.Error(c.r, c.g, c.b, run.norms[i], line.Weight(line.Dot(c.r, c.g, c.b))));
+  }
+  return e;
+}
+
+POINTDAG_AVX2 int64_t SignedErrorAvx2(const Run& run, const Line& line) {
+  int64_t e = 0;
+  uint32_t unused[kChunk];
+  for (uint32_t begin = 0; begin < run.length; begin += kChunk) {
+    e += static_cast<int32_t>(WeighChunk(run, begin, std::min(kChunk, run.length - begin), line, unused).sse);
+  }
+  return e;
+}
+
 // The lowest and highest projection c^T qa of a run's colors.
 std::pair<int32_t, int32_t> ExtentScalar(const Run& run, const int32_t qa[3]) {
   int32_t lowest = INT32_MAX, highest = INT32_MIN;
@@ -219,20 +260,28 @@ std::pair<int32_t, int32_t> ExtentScalar(const Run& run, const int32_t qa[3]) {
   return {lowest, highest};
 }
 
+// Per lane over the whole chunks, the rest color by color: GCC 12 made the masked chunks of one
+// accumulator a branch per color, unvectorized (lion: 4 % of an encode's instructions).
 POINTDAG_AVX2 std::pair<int32_t, int32_t> ExtentAvx2(const Run& run, const int32_t qa[3]) {
-  int32_t lowest = INT32_MAX, highest = INT32_MIN;
   const int32_t* __restrict r = run.r;
   const int32_t* __restrict g = run.g;
   const int32_t* __restrict b = run.b;
   const int32_t q0 = qa[0], q1 = qa[1], q2 = qa[2];
-  for (uint32_t begin = 0; begin < run.length; begin += kChunk) {
+  int32_t lowest[kChunk], highest[kChunk];
+  std::fill_n(lowest, kChunk, INT32_MAX);
+  std::fill_n(highest, kChunk, INT32_MIN);
+  const uint32_t whole = run.length - run.length % kChunk;
+  for (uint32_t begin = 0; begin < whole; begin += kChunk) {
     for (uint32_t i = 0; i < kChunk; ++i) {
       const int32_t p = r[begin + i] * q0 + g[begin + i] * q1 + b[begin + i] * q2;
-      const bool in = begin + i < run.length;
-      lowest = std::min(lowest, in ? p : INT32_MAX), highest = std::max(highest, in ? p : INT32_MIN);
+      lowest[i] = std::min(lowest[i], p), highest[i] = std::max(highest[i], p);
     }
   }
-  return {lowest, highest};
+  for (uint32_t i = whole; i < run.length; ++i) {
+    const int32_t p = r[i] * q0 + g[i] * q1 + b[i] * q2;
+    lowest[0] = std::min(lowest[0], p), highest[0] = std::max(highest[0], p);
+  }
+  return {*std::min_element(lowest, lowest + kChunk), *std::max_element(highest, highest + kChunk)};
 }
 
 // Weights and error for `ends`, then endpoints refined by least squares for those weights
@@ -268,6 +317,14 @@ BlockFit FitWeights(const Run& run, const int64_t sums[3], const Endpoints& ends
   return best;
 }
 
+// BlockFitter::ChromaError of a run whose norms are c^T C c (C = kChromaWeights), for wider blocks:
+// ChooseWeight by the fitter's projection, the palette's error in C.
+template <int kBits>
+int64_t ChromaOfRun(const Run& run, const Endpoints& ends) {
+  const Line line = MakeLine<kBits>(ends, kChromaWeights);
+  return run.r ? SignedErrorAvx2(run, line) : SignedErrorScalar(run, line);
+}
+
 }  // namespace
 
 bool BlockFitter::UseAvx2() {
@@ -280,21 +337,32 @@ bool BlockFitter::UseAvx2() {
 }
 
 BlockFitter::BlockFitter(std::span<const Rgb8> colors)
-    : colors_(colors), prefix_(colors.size() + 1), norms_(colors.size() + kChunk), avx2_(UseAvx2()) {
+    : colors_(colors),
+      prefix_(colors.size() + 1),
+      norms_(colors.size() + kChunk),
+      chroma_norms_(colors.size() + kChunk),
+      avx2_(UseAvx2()) {
   prefix_[0].fill(0);
   if (avx2_) {
     for (auto& plane : planes_) plane.resize(colors.size() + kChunk);
   }
+  // c^T M c from c's products (the sums' order), modulo 2^32: BlockError against black for Q.
+  const auto norm = [](const std::array<uint32_t, 9>& p, const int32_t (&m)[3][3]) {
+    return static_cast<uint32_t>(m[0][0] * p[3] + m[1][1] * p[4] + m[2][2] * p[5] + 2 * (m[0][1] * p[6] + m[0][2] * p[7] + m[1][2] * p[8]));
+  };
+  std::array<uint32_t, 9> sums{};
   for (size_t i = 0; i < colors.size(); ++i) {
     const uint32_t r = colors[i].r, g = colors[i].g, b = colors[i].b;
     const std::array<uint32_t, 9> add = {r, g, b, r * r, g * g, b * b, r * g, r * b, g * b};
-    for (int k = 0; k < 9; ++k) prefix_[i + 1][k] = prefix_[i][k] + add[k];
-    norms_[i] = BlockError(colors[i], Rgb8{0, 0, 0});
+    for (int k = 0; k < 9; ++k) sums[k] += add[k];
+    prefix_[i + 1] = sums;
+    norms_[i] = norm(add, kErrorWeights);
+    chroma_norms_[i] = norm(add, kChromaWeights);
     if (avx2_) planes_[0][i] = r, planes_[1][i] = g, planes_[2][i] = b;
   }
 }
 
-BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
+inline BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
   Sums out;
   for (int k = 0; k < 3; ++k) out.s[k] = int64_t{prefix_[end][k]} - prefix_[begin][k];
   for (int k = 0; k < 6; ++k) out.ss[k] = int64_t{prefix_[end][3 + k]} - prefix_[begin][3 + k];
@@ -302,29 +370,25 @@ BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) const {
 }
 
 BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above) const {
+  // A leaf (the tree fits every color alone at every width): the mean path's result, without the sums.
+  if (length == 1) return {{colors_[begin], colors_[begin]}, 0};
   const int64_t n = length;
   const Sums sums = RangeSums(begin, begin + length);
+  // One color for the whole block (0 bits, or all colors alike): the mean, whose error follows from the sums alone.
+  const auto mean = [&]() -> BlockFit {
+    const RoundDivider divide(n);
+    const Rgb8 c{divide.Mean(sums.s[0]), divide.Mean(sums.s[1]), divide.Mean(sums.s[2])};
+    const int64_t a[3] = {c.r, c.g, c.b};
+    return {{c, c}, static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kErrorWeights))};
+  };
+  if (bits == 0) return mean();
   // Covariance scaled by n^2: M[j][k] = n * sum(c_j c_k) - sum(c_j) sum(c_k).
   int64_t cov[3][3];
   for (int j = 0; j < 3; ++j) {
     for (int k = 0; k < 3; ++k) cov[j][k] = n * sums.ss[kPair[j][k]] - sums.s[j] * sums.s[k];
   }
   const int widest = cov[0][0] >= cov[1][1] ? (cov[0][0] >= cov[2][2] ? 0 : 2) : (cov[1][1] >= cov[2][2] ? 1 : 2);
-  if (bits == 0 || cov[widest][widest] == 0) {
-    // One color for the whole block: the mean, whose error follows from the sums alone:
-    // sum over colors of (c - a)^T Q (c - a) = sum_jk Q_jk (ss_jk - a_j s_k - a_k s_j + n a_j a_k).
-    int64_t a[3];
-    const RoundDivider divide(n);
-    for (int k = 0; k < 3; ++k) a[k] = divide(sums.s[k]);  // a mean of 0..255: never clamped
-    int64_t sse = 0;
-    for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 3; ++k) {
-        sse += kErrorWeights[j][k] * (sums.ss[kPair[j][k]] - a[j] * sums.s[k] - a[k] * sums.s[j] + n * a[j] * a[k]);
-      }
-    }
-    const Rgb8 c{Clamp255(a[0]), Clamp255(a[1]), Clamp255(a[2])};
-    return {{c, c}, static_cast<uint64_t>(sse)};
-  }
+  if (cov[widest][widest] == 0) return mean();
   // Principal axis in BlockError's metric (that of the colors' covariance with Q: v <- C Q v, the
   // RGB image of the principal axis of L^T C L, Q = L L^T) by power iteration, starting from the
   // widest channel's column. Q v is shrunk too, so that C (Q v) stays below 2^57.
@@ -364,6 +428,26 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     case 3: return FitWeights<3>(run, sums.s, ends, give_up_above);
     default: return FitWeights<4>(run, sums.s, ends, give_up_above);
   }
+}
+
+uint64_t BlockFitter::ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const {
+  if (length == 1 && ends.a == ends.b && ends.a == colors_[begin]) return 0;  // a leaf as fitted: exact
+  int64_t e;
+  if (bits == 0 || ends.a == ends.b) {
+    const Sums sums = RangeSums(begin, begin + length);
+    const int64_t a[3] = {ends.a.r, ends.a.g, ends.a.b};
+    e = ErrorAbout(sums.s, sums.ss, length, a, kChromaWeights);
+  } else {
+    const auto plane = [&](int k) { return avx2_ ? planes_[k].data() + begin : nullptr; };
+    const Run run{colors_.data() + begin, plane(0), plane(1), plane(2), chroma_norms_.data() + begin, length};
+    switch (bits) {
+      case 1: e = ChromaOfRun<1>(run, ends); break;
+      case 2: e = ChromaOfRun<2>(run, ends); break;
+      case 3: e = ChromaOfRun<3>(run, ends); break;
+      default: e = ChromaOfRun<4>(run, ends); break;
+    }
+  }
+  return static_cast<uint64_t>(std::max<int64_t>(e, 0));
 }
 
 }  // namespace pointdag

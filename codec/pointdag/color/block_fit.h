@@ -46,6 +46,11 @@ class BlockFitter {
   // twice it, refinement untried (a heuristic: results depend on it, and the Vulkan port does alike).
   BlockFit Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above = UINT64_MAX) const;
 
+  // The chroma part the variable-rate tree adds to a block's error (block_codec.cc): the sum over colors
+  // [begin, begin + length) of d^T kChromaWeights d, d = c - Interpolate(ends, ChooseWeight(c, ends, bits),
+  // bits), clamped at 0. From the sums alone where every color is rebuilt as A (0 bits, or A = B).
+  uint64_t ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const;
+
  private:
   struct Sums {
     int64_t s[3];   // sum of r, g, b
@@ -60,6 +65,7 @@ class BlockFitter {
   std::vector<std::array<uint32_t, 9>> prefix_;  // prefix_[i]: sums over colors [0, i)
   // Per color, padded with zeros so that the AVX2 loops may read whole chunks past the end:
   std::vector<uint32_t> norms_;                 // c^T Q c (BlockError against black)
+  std::vector<uint32_t> chroma_norms_;          // c^T C c, C = kChromaWeights (modulo 2^32: C has negative entries)
   bool avx2_;
   std::array<std::vector<int32_t>, 3> planes_;  // r, g, b; empty without AVX2
 };
@@ -81,6 +87,8 @@ inline uint32_t SquaredError(const Rgb8& x, const Rgb8& y) {
 // PSNR-Y, so luma counts 3/w times more than chroma (w = 1/2: MPEG's 6:1:1); a gray difference costs what
 // the RGB squared error does. Q is positive definite, so every term sum below is >= 0.
 constexpr int32_t kErrorWeights[3][3] = {{274, 373, 6}, {373, 1753, 71}, {6, 71, 145}};
+// The chroma part alone, 1024 x 1/2 (cb cb^T + cr cr^T) rounded (BlockFitter::ChromaError).
+constexpr int32_t kChromaWeights[3][3] = {{135, -94, -41}, {-94, 182, -88}, {-41, -88, 129}};
 
 inline uint32_t BlockError(const Rgb8& x, const Rgb8& y) {
   const int32_t d[3] = {x.r - y.r, x.g - y.g, x.b - y.b};
