@@ -327,6 +327,8 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
       } else {
         block_weights = chosen.subspan(b.start, b.length);
       }
+      std::array<Rgb8, 1 << kMaxWeightBits> palette;  // Interpolate divides by a run-time 2^bits - 1: once per weight value
+      for (uint32_t w = 0; w < (1u << b.bits); ++w) palette[w] = Interpolate(b.ends, w, b.bits);
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = block_weights[i - b.start];
@@ -336,7 +338,7 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
           const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
           EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
         }
-        const Rgb8 c = Interpolate(b.ends, w, b.bits);
+        const Rgb8 c = palette[w];
         if (spatial) spatial->Record(i, c);
         if (decoded) (*decoded)[i] = c;
         prev_w = w;
