@@ -36,7 +36,7 @@ struct YoungBitModel {
     const Rates r = kRates[n];
     fast = static_cast<uint16_t>(fast + (((target - fast) * r.fast) >> 16));
     slow = static_cast<uint16_t>(slow + (((target - slow) * r.slow) >> 16));
-    if (n < kYoung) ++n;
+    n = static_cast<uint8_t>(n + (n < kYoung ? 1 : 0));  // no branch: saturates at kYoung
   }
 
  private:
@@ -62,7 +62,7 @@ struct CompactYoungModel {
   void Update(int bit) {
     const int32_t target = bit ? 0 : 65535;
     p = static_cast<uint16_t>(p + (((target - p) * kRates[n]) >> 16));
-    if (n < kYoung) ++n;
+    n = static_cast<uint8_t>(n + (n < kYoung ? 1 : 0));  // no branch: saturates at kYoung
   }
 
  private:
@@ -85,7 +85,7 @@ struct SteadyBitModel {
     const int32_t target = bit ? 0 : 65535;
     fast = static_cast<uint16_t>(fast + (((target - fast) * kRate[std::min<int>(n, kFastest)]) >> 16));
     slow = static_cast<uint16_t>(slow + (((target - slow) * kRate[n]) >> 16));
-    if (n < kSlowest) ++n;
+    n = static_cast<uint16_t>(n + (n < kSlowest ? 1 : 0));
   }
 
  private:
@@ -99,15 +99,13 @@ struct SteadyBitModel {
 
 class BinaryRangeEncoder {
  public:
+  // Branch-free, as the decoder: a mask selects the interval's half.
   template <typename Model>
   void Encode(Model& m, int bit) {
     const uint32_t bound = (range_ >> 12) * m.P0();
-    if (bit == 0) {
-      range_ = bound;
-    } else {
-      low_ += bound;
-      range_ -= bound;
-    }
+    const uint32_t one = 0u - static_cast<uint32_t>(bit != 0);  // all ones when the bit is 1
+    low_ += bound & one;
+    range_ = ((range_ - bound) & one) | (bound & ~one);
     m.Update(bit);
     Normalize();
   }
@@ -125,11 +123,15 @@ class BinaryRangeEncoder {
   }
 
  private:
+  // Most bits leave the range above 2^24: the test inline, the byte output out of line.
   void Normalize() {
-    while (range_ < (1u << 24)) {
+    if (range_ < (1u << 24)) [[unlikely]] Renormalize();
+  }
+  [[gnu::noinline]] void Renormalize() {
+    do {
       range_ <<= 8;
       ShiftLow();
-    }
+    } while (range_ < (1u << 24));
   }
   void ShiftLow() {
     if (static_cast<uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {
@@ -194,10 +196,13 @@ class BinaryRangeDecoder {
     return byte;
   }
   void Normalize() {
-    while (range_ < (1u << 24)) {
+    if (range_ < (1u << 24)) [[unlikely]] Renormalize();
+  }
+  [[gnu::noinline]] void Renormalize() {
+    do {
       range_ <<= 8;
       code_ = code_ << 8 | Next();
-    }
+    } while (range_ < (1u << 24));
   }
 
   std::span<const uint8_t> in_;
