@@ -36,7 +36,7 @@ struct YoungBitModel {
     const Rates r = kRates[n];
     fast = static_cast<uint16_t>(fast + (((target - fast) * r.fast) >> 16));
     slow = static_cast<uint16_t>(slow + (((target - slow) * r.slow) >> 16));
-    n = static_cast<uint8_t>(n + (n < kYoung ? 1 : 0));  // no branch: saturates at kYoung
+    if (n < kYoung) ++n;
   }
 
  private:
@@ -62,7 +62,7 @@ struct CompactYoungModel {
   void Update(int bit) {
     const int32_t target = bit ? 0 : 65535;
     p = static_cast<uint16_t>(p + (((target - p) * kRates[n]) >> 16));
-    n = static_cast<uint8_t>(n + (n < kYoung ? 1 : 0));  // no branch: saturates at kYoung
+    if (n < kYoung) ++n;
   }
 
  private:
@@ -85,7 +85,7 @@ struct SteadyBitModel {
     const int32_t target = bit ? 0 : 65535;
     fast = static_cast<uint16_t>(fast + (((target - fast) * kRate[std::min<int>(n, kFastest)]) >> 16));
     slow = static_cast<uint16_t>(slow + (((target - slow) * kRate[n]) >> 16));
-    n = static_cast<uint16_t>(n + (n < kSlowest ? 1 : 0));
+    if (n < kSlowest) ++n;
   }
 
  private:
@@ -99,13 +99,13 @@ struct SteadyBitModel {
 
 class BinaryRangeEncoder {
  public:
-  // Branch-free, as the decoder: a mask selects the interval's half.
+  // Branch-free, as the decoder: selects, not a branch on a coin-toss bit.
   template <typename Model>
   void Encode(Model& m, int bit) {
     const uint32_t bound = (range_ >> 12) * m.P0();
-    const uint32_t one = 0u - static_cast<uint32_t>(bit != 0);  // all ones when the bit is 1
-    low_ += bound & one;
-    range_ = ((range_ - bound) & one) | (bound & ~one);
+    const bool one = bit != 0;
+    low_ += one ? bound : 0u;
+    range_ = one ? range_ - bound : bound;
     m.Update(bit);
     Normalize();
   }
