@@ -42,7 +42,7 @@ inline constexpr auto kMortonBytes = [] {
 }();
 
 // Three table lookups per axis (bytes 0 and 1, then the top 5 bits) where SpreadBits3 takes five
-// shift-or-mask steps: 0.4 times the instructions, the same codes (morton_test).
+// shift-or-mask steps: half the instructions, the same codes (Morton.TableMatchesSpreadBits).
 constexpr uint64_t MortonEncode(uint32_t x, uint32_t y, uint32_t z) {
   const auto group = [](uint32_t xb, uint32_t yb, uint32_t zb) {
     return kMortonBytes[0][xb] | kMortonBytes[1][yb] | kMortonBytes[2][zb];
