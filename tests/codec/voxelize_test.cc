@@ -23,6 +23,15 @@ TEST(Morton, RoundTripsAndInterleavesXHighest) {
   }
 }
 
+// The table-driven MortonEncode against the bit-spreading definition, high bits beyond 21 ignored.
+TEST(Morton, TableMatchesSpreadBits) {
+  std::mt19937 rng(7);
+  for (int i = 0; i < 100000; ++i) {
+    const auto x = static_cast<uint32_t>(rng()), y = static_cast<uint32_t>(rng()), z = static_cast<uint32_t>(rng());
+    EXPECT_EQ(MortonEncode(x, y, z), SpreadBits3(x) << 2 | SpreadBits3(y) << 1 | SpreadBits3(z));
+  }
+}
+
 StatusOr<VoxelGrid> VoxelizeInMemory(std::vector<std::array<double, 3>> xyz, std::vector<std::array<uint16_t, 3>> rgb,
                         VoxelizeOptions options) {
   MemoryScanReader reader(std::move(xyz), std::move(rgb));

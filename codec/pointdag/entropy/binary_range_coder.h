@@ -99,15 +99,13 @@ struct SteadyBitModel {
 
 class BinaryRangeEncoder {
  public:
+  // Branch-free, as the decoder: selects, not a branch on a coin-toss bit.
   template <typename Model>
   void Encode(Model& m, int bit) {
     const uint32_t bound = (range_ >> 12) * m.P0();
-    if (bit == 0) {
-      range_ = bound;
-    } else {
-      low_ += bound;
-      range_ -= bound;
-    }
+    const bool one = bit != 0;
+    low_ += one ? bound : 0u;
+    range_ = one ? range_ - bound : bound;
     m.Update(bit);
     Normalize();
   }
@@ -125,11 +123,15 @@ class BinaryRangeEncoder {
   }
 
  private:
+  // Most bits leave the range above 2^24: the test inline, the byte output out of line.
   void Normalize() {
-    while (range_ < (1u << 24)) {
+    if (range_ < (1u << 24)) [[unlikely]] Renormalize();
+  }
+  [[gnu::noinline]] void Renormalize() {
+    do {
       range_ <<= 8;
       ShiftLow();
-    }
+    } while (range_ < (1u << 24));
   }
   void ShiftLow() {
     if (static_cast<uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {
@@ -194,10 +196,13 @@ class BinaryRangeDecoder {
     return byte;
   }
   void Normalize() {
-    while (range_ < (1u << 24)) {
+    if (range_ < (1u << 24)) [[unlikely]] Renormalize();
+  }
+  [[gnu::noinline]] void Renormalize() {
+    do {
       range_ <<= 8;
       code_ = code_ << 8 | Next();
-    }
+    } while (range_ < (1u << 24));
   }
 
   std::span<const uint8_t> in_;

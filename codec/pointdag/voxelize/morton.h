@@ -32,8 +32,23 @@ constexpr uint32_t CompactBits3(uint64_t x) {
   return static_cast<uint32_t>(x);
 }
 
+// A byte of each axis spread to its place in a 24-bit group: x's bits at 3i+2, y's at 3i+1, z's at 3i.
+inline constexpr auto kMortonBytes = [] {
+  std::array<std::array<uint64_t, 256>, 3> t{};
+  for (uint32_t b = 0; b < 256; ++b) {
+    for (int axis = 0; axis < 3; ++axis) t[axis][b] = SpreadBits3(b) << (2 - axis);
+  }
+  return t;
+}();
+
+// Three table lookups per axis (bytes 0 and 1, then the top 5 bits) where SpreadBits3 takes five
+// shift-or-mask steps: half the instructions, the same codes (Morton.TableMatchesSpreadBits).
 constexpr uint64_t MortonEncode(uint32_t x, uint32_t y, uint32_t z) {
-  return SpreadBits3(x) << 2 | SpreadBits3(y) << 1 | SpreadBits3(z);
+  const auto group = [](uint32_t xb, uint32_t yb, uint32_t zb) {
+    return kMortonBytes[0][xb] | kMortonBytes[1][yb] | kMortonBytes[2][zb];
+  };
+  return group(x & 255, y & 255, z & 255) | group(x >> 8 & 255, y >> 8 & 255, z >> 8 & 255) << 24 |
+         group(x >> 16 & 31, y >> 16 & 31, z >> 16 & 31) << 48;
 }
 
 constexpr std::array<uint32_t, 3> MortonDecode(uint64_t code) {
