@@ -59,10 +59,16 @@ TEST(BlockFit, ExactWhereTheModelAllows) {
   EXPECT_EQ(FitError(ramp, 2), 0u);  // 4 evenly spaced colors = 2-bit weights exactly
 }
 
-TEST(BlockFit, ErrorIsTheReconstructionsAndRangesAreIndependent) {
-  std::mt19937 rng(7);
+// 300 random colors, red spread wide, green and blue narrower: blocks that need every weight width.
+std::vector<Rgb8> SkewedRandomColors(uint32_t seed) {
+  std::mt19937 rng(seed);
   std::vector<Rgb8> colors(300);
   for (Rgb8& c : colors) c = {uint8_t(rng()), uint8_t(rng() % 64), uint8_t(100 + rng() % 32)};
+  return colors;
+}
+
+TEST(BlockFit, ErrorIsTheReconstructionsAndRangesAreIndependent) {
+  const std::vector<Rgb8> colors = SkewedRandomColors(7);
   const BlockFitter whole(colors);
   for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
     const BlockFit fit = whole.Fit(40, 200, bits);
@@ -78,9 +84,7 @@ TEST(BlockFit, ErrorIsTheReconstructionsAndRangesAreIndependent) {
 // ChromaError is the per-color sum it stands for (ChooseWeight, Interpolate, kChromaWeights), for
 // fitted and arbitrary endpoints (A = B included) and lengths off the AVX2 chunk.
 TEST(BlockFit, ChromaErrorIsThePerColorSum) {
-  std::mt19937 rng(11);
-  std::vector<Rgb8> colors(300);
-  for (Rgb8& c : colors) c = {uint8_t(rng()), uint8_t(rng() % 64), uint8_t(100 + rng() % 32)};
+  const std::vector<Rgb8> colors = SkewedRandomColors(11);
   const BlockFitter fitter(colors);
   for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
     for (const uint32_t length : {1u, 7u, 9u, 200u}) {
