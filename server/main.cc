@@ -12,6 +12,7 @@
 #include "config.h"
 #include "nightly.h"
 #include "pointdag/gpu/stage_device.h"
+#include "pointdag/ingest.h"
 #include "pointdag/pipeline.h"
 #include "http_server.h"
 #include "jobs.h"
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
   app.add_option("--web-dir", web_dir, "the web viewer's files (build/web); \"\" serves no viewer");
   app.add_flag("--check", check, "check the store in --data-dir and exit: 0 consistent, 1 with a report");
   CLI11_PARSE(app, argc, argv);
+  RetainFreedMemory();  // upload after upload reuses the heap
 
   DaemonConfig config;
   if (!config_file.empty()) {

@@ -5,6 +5,10 @@
 #include <cmath>
 #include <future>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "pointdag/compare/point_metrics.h"
 #include "pointdag/read/remembering_reader.h"
 
@@ -43,6 +47,17 @@ double RoundUpTo125(double spacing) {
     if (step * decade >= spacing * (1 - 1e-9)) return step * decade;
   }
   return 10 * decade;
+}
+
+// glibc's defaults return any freed chunk of 128 KiB or more, and a heap top of twice that, to the
+// kernel; a running daemon's second ingest of autzen_trim then took 20,000 page faults and 14 % of
+// its CPU in the kernel's clear_page. With these: 9,000 faults, task-clock 438-532 -> 420-427 ms for
+// `bench --ingest` on autzen (docs/benchmarks.md). Arrays of 32 MiB and more still come from mmap.
+void RetainFreedMemory() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 128 << 20);
+#endif
 }
 
 TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_db) {

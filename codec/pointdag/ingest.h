@@ -59,4 +59,9 @@ double RoundUpTo125(double spacing);
 // scan without points or whose first points all coincide.
 StatusOr<double> DeriveVoxelSize(ScanReader& reader);
 
+// For a process that ingests scan after scan (pointdagd, `bench --ingest`): freed buffers below
+// 32 MiB stay in the heap for the next upload instead of going back to the kernel, which would
+// fault them in again as zeroed pages (glibc only; elsewhere it does nothing).
+void RetainFreedMemory();
+
 }  // namespace pointdag
