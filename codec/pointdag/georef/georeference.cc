@@ -1,10 +1,10 @@
 #include "pointdag/georef/georeference.h"
 
 #include "pointdag/georef/local_enu_map.h"
+#include "pointdag/georef/proj_library.h"
 
 #include <GeographicLib/Geocentric.hpp>
 #include <GeographicLib/LocalCartesian.hpp>
-#include <proj.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -22,10 +22,10 @@ namespace {
 
 // A PROJ context that never reaches the network and logs nothing (errors come back as Status).
 PJ_CONTEXT* QuietContext() {
-  PJ_CONTEXT* ctx = proj_context_create();
+  PJ_CONTEXT* ctx = Proj().context_create();
   if (ctx) {
-    proj_context_set_enable_network(ctx, 0);
-    proj_log_level(ctx, PJ_LOG_NONE);
+    Proj().context_set_enable_network(ctx, 0);
+    Proj().log_level(ctx, PJ_LOG_NONE);
   }
   return ctx;
 }
@@ -41,8 +41,8 @@ struct ProjLane {
   ProjLane(const ProjLane&) = delete;
   ProjLane& operator=(const ProjLane&) = delete;
   ~ProjLane() {
-    if (pj) proj_destroy(pj);
-    if (ctx) proj_context_destroy(ctx);
+    if (pj) Proj().destroy(pj);
+    if (ctx) Proj().context_destroy(ctx);
   }
 };
 
@@ -56,8 +56,8 @@ struct Georeferencer::Impl {
 
   ~Impl() {
     lanes.clear();
-    if (to_geographic) proj_destroy(to_geographic);
-    if (ctx) proj_context_destroy(ctx);
+    if (to_geographic) Proj().destroy(to_geographic);
+    if (ctx) Proj().context_destroy(ctx);
   }
 
   // This thread's clone of to_geographic (null if PROJ could not make one).
@@ -65,7 +65,7 @@ struct Georeferencer::Impl {
     ProjLane& lane = lanes.local();
     if (!lane.pj) {
       lane.ctx = QuietContext();
-      lane.pj = proj_clone(lane.ctx, to_geographic);
+      lane.pj = Proj().clone(lane.ctx, to_geographic);
     }
     return lane.pj;
   }
@@ -77,19 +77,19 @@ namespace {
 struct PjHolder {
   PJ* pj = nullptr;
   ~PjHolder() {
-    if (pj) proj_destroy(pj);
+    if (pj) Proj().destroy(pj);
   }
 };
 
-std::string ProjError(PJ_CONTEXT* ctx) { return proj_context_errno_string(ctx, proj_context_errno(ctx)); }
+std::string ProjError(PJ_CONTEXT* ctx) { return Proj().context_errno_string(ctx, Proj().context_errno(ctx)); }
 
 // Metres per unit of the first axis of `crs`'s coordinate system, and its axis count.
 std::pair<double, int> AxisUnit(PJ_CONTEXT* ctx, PJ* crs) {
-  PjHolder cs{proj_crs_get_coordinate_system(ctx, crs)};
+  PjHolder cs{Proj().crs_get_coordinate_system(ctx, crs)};
   if (!cs.pj) return {1.0, 0};
   double factor = 1.0;
-  proj_cs_get_axis_info(ctx, cs.pj, 0, nullptr, nullptr, nullptr, &factor, nullptr, nullptr, nullptr);
-  return {factor, proj_cs_get_axis_count(ctx, cs.pj)};
+  Proj().cs_get_axis_info(ctx, cs.pj, 0, nullptr, nullptr, nullptr, &factor, nullptr, nullptr, nullptr);
+  return {factor, Proj().cs_get_axis_count(ctx, cs.pj)};
 }
 
 }  // namespace
@@ -131,8 +131,8 @@ struct ResolvedCrs {
   ResolvedCrs(const ResolvedCrs&) = delete;
   ResolvedCrs& operator=(const ResolvedCrs&) = delete;
   ~ResolvedCrs() {
-    if (to_geographic) proj_destroy(to_geographic);
-    if (ctx) proj_context_destroy(ctx);
+    if (to_geographic) Proj().destroy(to_geographic);
+    if (ctx) Proj().context_destroy(ctx);
   }
 };
 
@@ -141,22 +141,22 @@ StatusOr<std::unique_ptr<ResolvedCrs>> ResolveCrs(const std::string& crs) {
   out->ctx = QuietContext();
   if (!out->ctx) return Internal("PROJ context could not be created");
   PJ_CONTEXT* ctx = out->ctx;
-  PjHolder source{proj_create(ctx, crs.c_str())};
-  if (!source.pj || !proj_is_crs(source.pj)) {
+  PjHolder source{Proj().create(ctx, crs.c_str())};
+  if (!source.pj || !Proj().is_crs(source.pj)) {
     return InvalidArgument("unknown CRS '" + crs.substr(0, 120) + "': " + ProjError(ctx));
   }
-  if (proj_get_type(source.pj) == PJ_TYPE_BOUND_CRS) {
-    PjHolder base{proj_get_source_crs(ctx, source.pj)};
+  if (Proj().get_type(source.pj) == PJ_TYPE_BOUND_CRS) {
+    PjHolder base{Proj().get_source_crs(ctx, source.pj)};
     std::swap(source.pj, base.pj);
   }
-  out->name = proj_get_name(source.pj) ? proj_get_name(source.pj) : "";
-  if (const char* wkt = proj_as_wkt(ctx, source.pj, PJ_WKT2_2019, nullptr)) out->wkt = wkt;
-  if (const char* auth = proj_get_id_auth_name(source.pj, 0); auth && std::string(auth) == "EPSG") {
-    out->epsg = std::atoi(proj_get_id_code(source.pj, 0));
+  out->name = Proj().get_name(source.pj) ? Proj().get_name(source.pj) : "";
+  if (const char* wkt = Proj().as_wkt(ctx, source.pj, PJ_WKT2_2019, nullptr)) out->wkt = wkt;
+  if (const char* auth = Proj().get_id_auth_name(source.pj, 0); auth && std::string(auth) == "EPSG") {
+    out->epsg = std::atoi(Proj().get_id_code(source.pj, 0));
   }
-  out->type = proj_get_type(source.pj);
+  out->type = Proj().get_type(source.pj);
   // Horizontal part of a compound CRS decides the horizontal unit; a 2D CRS has no vertical axis.
-  PjHolder horizontal{out->type == PJ_TYPE_COMPOUND_CRS ? proj_crs_get_sub_crs(ctx, source.pj, 0) : nullptr};
+  PjHolder horizontal{out->type == PJ_TYPE_COMPOUND_CRS ? Proj().crs_get_sub_crs(ctx, source.pj, 0) : nullptr};
   const auto [unit, axes] = AxisUnit(ctx, horizontal.pj ? horizontal.pj : source.pj);
   const bool has_vertical = out->type == PJ_TYPE_COMPOUND_CRS || out->type == PJ_TYPE_GEOCENTRIC_CRS || axes == 3;
   if (has_vertical) {
@@ -165,10 +165,10 @@ StatusOr<std::unique_ptr<ResolvedCrs>> ResolveCrs(const std::string& crs) {
     out->z_scale = out->type == PJ_TYPE_PROJECTED_CRS ? unit : 1.0;
     out->vertical = "no vertical CRS: Z taken in the horizontal unit and used as ellipsoidal height";
   }
-  PjHolder wgs84{proj_create(ctx, "EPSG:4979")};
-  PjHolder raw{proj_create_crs_to_crs_from_pj(ctx, source.pj, wgs84.pj, nullptr, nullptr)};
+  PjHolder wgs84{Proj().create(ctx, "EPSG:4979")};
+  PjHolder raw{Proj().create_crs_to_crs_from_pj(ctx, source.pj, wgs84.pj, nullptr, nullptr)};
   if (!raw.pj) return InvalidArgument("no transformation from " + out->name + " to WGS84: " + ProjError(ctx));
-  out->to_geographic = proj_normalize_for_visualization(ctx, raw.pj);
+  out->to_geographic = Proj().normalize_for_visualization(ctx, raw.pj);
   if (!out->to_geographic) return Internal("PROJ could not normalize the axis order: " + ProjError(ctx));
   return out;
 }
@@ -195,7 +195,7 @@ class CrsCache {
       resolved = entries_.try_emplace(crs, std::move(fresh)).first->second;
     }
     std::lock_guard lock(mutex_);
-    PJ* clone = proj_clone(ctx, resolved->to_geographic);
+    PJ* clone = Proj().clone(ctx, resolved->to_geographic);
     if (!clone) return Internal("PROJ could not copy the transformation from " + resolved->name + ": " + ProjError(ctx));
     return std::pair{resolved, clone};
   }
@@ -210,6 +210,7 @@ class CrsCache {
 
 StatusOr<std::unique_ptr<Georeferencer>> Georeferencer::Create(const std::string& crs, const std::string& crs_source,
                                                                const std::array<double, 3>& centre) {
+  RETURN_IF_ERROR(LoadProj());
   auto impl = std::make_unique<Impl>();
   impl->ctx = QuietContext();
   if (!impl->ctx) return Internal("PROJ context could not be created");
@@ -281,7 +282,7 @@ bool Georeferencer::TransformExactly(std::span<std::array<double, 3>> part, bool
     for (auto& p : part) p[2] *= impl_->z_scale;
   }
   constexpr size_t stride = sizeof(std::array<double, 3>);
-  proj_trans_generic(pj, PJ_FWD, &part[0][0], stride, part.size(), &part[0][1], stride, part.size(), &part[0][2], stride,
+  Proj().trans_generic(pj, PJ_FWD, &part[0][0], stride, part.size(), &part[0][1], stride, part.size(), &part[0][2], stride,
                      part.size(), nullptr, 0, 0);
   for (auto& p : part) {
     // PROJ marks failed points with HUGE_VAL; normalized output is (lon, lat, h).
