@@ -123,6 +123,13 @@ TEST(Georeference, UnknownCrsIsAnError) {
   EXPECT_NE(geo.status().message().find("unknown CRS"), std::string::npos);
 }
 
+// Autzen's feet in EPSG:4326 are far outside any latitude: the error names the CRS it came from.
+TEST(Georeference, ACentreOutsideTheCrsDomainIsAnErrorNamingTheCrs) {
+  auto geo = Georeferencer::Create("EPSG:4326", "epsg-override", {4.6e6, 1.3e6, 500});
+  ASSERT_EQ(geo.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(geo.status().message().find("outside the domain of WGS 84:"), std::string::npos) << geo.status().message();
+}
+
 // A CRS is resolved once per process and its operation cloned for every later Georeferencer: those
 // made at once on several threads, for other centres, transform exactly as a first one does, and a
 // CRS that failed is not remembered as resolved.

@@ -235,6 +235,7 @@ StatusOr<std::unique_ptr<Georeferencer>> Georeferencer::Create(const std::string
   }
 
   std::unique_ptr<Georeferencer> out(new Georeferencer(std::move(impl)));
+  out->frame_.crs_name = frame.crs_name;  // for Transform's error
   std::array<double, 3> origin = centre;
   RETURN_IF_ERROR(out->ToGeographic(std::span(&origin, 1)));
   frame.origin_llh = origin;
