@@ -167,6 +167,8 @@ nlohmann::json MeasureColorDecoding(const std::vector<Rgb8>& colors, std::span<c
           {"checksum", sink}};
 }
 
+}  // namespace
+
 std::vector<std::filesystem::path> ScansIn(const std::string& dir) {
   std::vector<std::filesystem::path> scans;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -177,7 +179,11 @@ std::vector<std::filesystem::path> ScansIn(const std::string& dir) {
   return scans;
 }
 
-}  // namespace
+std::optional<int> CrsOverride(const std::string& scan_name) {
+  // Lone Star's stored CRS is wrong, in its LAS and in its LAZ/COPC copies alike (UTM 12N is right).
+  if (scan_name.find("lone_star") != std::string::npos || scan_name.find("lone-star") != std::string::npos) return 26912;
+  return std::nullopt;
+}
 
 // The daemon's pipeline (read, georeference, voxelize, tile, Draco) on one scan at its derived voxel
 // size, twice in this process: the first as a freshly started daemon's first upload (PROJ resolves
@@ -190,9 +196,7 @@ nlohmann::json RunIngestCase(const std::filesystem::path& scan, uint64_t max_poi
   const uint64_t baseline = RssAndPeak().first;
   IngestOptions options;
   options.max_points_in_memory = max_points_in_memory;
-  // Lone Star's stored CRS is wrong, in its LAS and in its LAZ/COPC copies alike (UTM 12N is right).
-  const std::string name = scan.filename().string();
-  if (name.find("lone_star") != std::string::npos || name.find("lone-star") != std::string::npos) options.epsg = 26912;
+  options.epsg = CrsOverride(scan.filename().string());
   double first_seconds = 0;
   {  // freed before the second run
     auto first = IngestScan(scan, options);
@@ -403,6 +407,7 @@ int RunBench(const BenchOptions& options) {
   if (!options.corpus.empty()) return RunCorpusBench(options);
   if (options.versus) return RunVersusBench(options);
   if (options.ingest) return RunIngestBench(options);
+  if (!options.server.empty()) return RunUploadBench(options);
   const auto scans = ScansIn(options.data_dir);
   if (!options.json) {
     std::printf("machine: %s; one core (the codec core is single-threaded); times are the best of 3 runs\n",

@@ -4,9 +4,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace pointdag {
 
@@ -18,6 +20,7 @@ struct BenchOptions {
   bool devices = false;  // each stage with Vulkan kernels, CPU path vs Vulkan path
   bool laz = false;      // LAZ decoding (data_dir/laz): points/s on one core and all, LAZ vs LAS ingest
   bool versus = false;   // issue #14: ours, Draco and G-PCC side by side (sizes at equal PSNR-Y)
+  std::string server;    // a running pointdagd's URL: each scan uploaded to it, end to end (tools/upload_bench.cc)
   uint64_t max_points_in_memory = uint64_t{1} << 25;
   // The nightly benchmark (issue #15): a corpus (TOML or folder), the report folder, a baseline
   // report (default: the newest in out_dir), the tolerances, and how many reports to keep (0: all).
@@ -30,8 +33,13 @@ int RunBench(const BenchOptions& options);
 int RunLazBench(const BenchOptions& options);  // tools/laz_bench.cc
 int RunVersusBench(const BenchOptions& options);  // tools/versus_bench.cc
 int RunCorpusBench(const BenchOptions& options);  // tools/corpus_bench.cc
+int RunUploadBench(const BenchOptions& options);  // tools/upload_bench.cc
 
 // Shared by the benchmarks.
+// The scans (.las, .ply, .pcd) in `dir`, sorted by name.
+std::vector<std::filesystem::path> ScansIn(const std::string& dir);
+// The CRS a shared scan must be read in because the one it stores is wrong (lone_star's), if any.
+std::optional<int> CrsOverride(const std::string& scan_name);
 // Resident set size now and its high-water mark, in bytes (from /proc/self/status).
 std::pair<uint64_t, uint64_t> RssAndPeak();
 // Runs one case in a forked child, so each case's peak RSS is its own; its JSON comes back.

@@ -327,6 +327,8 @@ int Main(int argc, char** argv) {
   bench->add_flag("--devices", bench_options.devices, "each stage with Vulkan kernels on the CPU and on Vulkan: points/s");
   bench->add_option("--chunk-points", bench_options.max_points_in_memory, "as for encode")->check(CLI::PositiveNumber);
   bench->add_flag("--laz", bench_options.laz, "LAZ decoding of DATA/laz: points/s on one core and all; LAZ vs LAS ingest");
+  bench->add_option("--server", bench_options.server,
+                    "upload each scan twice to the pointdagd at this URL (POINTDAGD_TOKEN if it needs one): end-to-end seconds and points/s");
   bench->add_flag("--versus", bench_options.versus, "ours, Draco and G-PCC side by side: geometry, colors at 34/38/42 dB, lossless totals");
   std::string shadow_bench_dir;
   auto* shadow_bench = bench->add_option("--shadow", shadow_bench_dir,
