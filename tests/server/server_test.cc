@@ -419,6 +419,37 @@ TEST(ServerJobs, AStoreWithoutTheAttemptsColumnIsMigrated) {
 }
 
 // Invalid UTF-8 in the name: a valid JSON answer (U+FFFD in place of the byte), and a dataset.
+// `pointdag bench --server`: each scan uploaded twice with the write token, a row of figures per
+// scan, and the benchmark's datasets deleted again.
+TEST_F(ServerTest, UploadBenchReportsEndToEndAndLeavesNoDataset) {
+  SKIP_WITHOUT_DATA();
+  testing::ScratchDir dir;
+  std::filesystem::create_directories(dir / "scans");
+  std::filesystem::copy_file(testing::DataDir() / "tiny_1.2-with-color_1065pts.las", dir / "scans" / "tiny.las");
+  auto c = daemon_->Connect();
+  const auto count = [&] {
+    auto listed = c->Request("GET", "/v1/datasets", kAuth);
+    EXPECT_TRUE(listed.ok());
+    return Json(*listed)["datasets"].size();
+  };
+  const size_t before = count();
+  const std::string url = "http://127.0.0.1:" + std::to_string(daemon_->port());
+  const auto run = testing::Cli("bench --server " + url + " --data " + (dir / "scans").string() + " --json", dir,
+                                std::string("POINTDAGD_TOKEN=") + kToken);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json row = nlohmann::json::parse(run.out);
+  EXPECT_EQ(row["scan"], "tiny.las");
+  EXPECT_EQ(row["points"], 1065);
+  EXPECT_EQ(row["voxel"], 100);
+  EXPECT_GT(row["end_to_end_s"].get<double>(), row["daemon_ingest_s"].get<double>());
+  EXPECT_GT(row["daemon_ingest_s"].get<double>(), 0);
+  EXPECT_EQ(count(), before);
+  // Without the token the daemon refuses the upload, and the bench says so.
+  const auto refused = testing::Cli("bench --server " + url + " --data " + (dir / "scans").string(), dir);
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find("got 401"), std::string::npos) << refused.err;
+}
+
 TEST_F(ServerTest, InvalidUtf8InTheNameGivesValidJson) {
   SKIP_WITHOUT_DATA();
   auto c = daemon_->Connect();
