@@ -78,12 +78,17 @@ std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candid
         const uint32_t length = blocks[i].length + blocks[i + 1].length;
         const uint64_t limit = limit_of(blocks[i], blocks[i + 1]);
         const BlockFit fit = fitter.Fit(blocks[i].start, length, bits, limit);
-        Candidate merged{blocks[i].start, length, fit};
-        if (fit.sse <= limit && (!weighed || WeighedError(fitter, merged, bits) <= limit)) {
-          out.push_back(std::move(merged));
-          merged_any = true;
-          ++i;
-          continue;
+        if (fit.sse <= limit) {
+          Candidate merged{blocks[i].start, length, fit};
+          // Most weighed trials that fail here do so on their chroma part: its walk stops once it passes what is left.
+          const uint64_t chroma_limit = (limit - fit.sse) / kChromaTimes;
+          if (weighed) merged.chroma = fitter.ChromaError(merged.start, length, bits, fit.ends, chroma_limit);
+          if (!weighed || *merged.chroma <= chroma_limit) {
+            out.push_back(std::move(merged));
+            merged_any = true;
+            ++i;
+            continue;
+          }
         }
         blocks[i].failed_with = blocks[i + 1].length;
       }

@@ -78,7 +78,8 @@ void Shrink(int64_t v[3]) {
 // exact in a double, the denominator below 2^30, so a quotient that is not an integer is at least 2^-30
 // from one, and the product's error, the quotient being below 16, is below 2^-47); Interpolate's once
 // per weight, the palette as arrays so that the AVX2 loops gather from it. The palette's error may be
-// taken in another metric (kChromaWeights), whose terms are signed: they are exact modulo 2^32.
+// taken in another metric (kChromaWeights): its terms are computed modulo 2^32, their sum d^T C d is
+// exact (C is positive semidefinite, and its terms are below Q's).
 struct Line {
   int32_t a[3];     // endpoint A
   int32_t q[3];     // Q (B - A)
@@ -231,25 +232,6 @@ POINTDAG_AVX2 uint64_t ErrorAvx2(const Run& run, const Line& line, uint64_t stop
   return sse;
 }
 
-// ErrorScalar and ErrorAvx2 in a signed metric (the run's norms and the line's palette in it), whole runs.
-int64_t SignedErrorScalar(const Run& run, const Line& line) {
-  int64_t e = 0;
-  for (uint32_t i = 0; i < run.length; ++i) {
-    const Rgb8 c = run.colors[i];
-    e += static_cast<int32_t>(line.Error(c.r, c.g, c.b, run.norms[i], line.Weight(line.Dot(c.r, c.g, c.b))));
-  }
-  return e;
-}
-
-POINTDAG_AVX2 int64_t SignedErrorAvx2(const Run& run, const Line& line) {
-  int64_t e = 0;
-  uint32_t unused[kChunk];
-  for (uint32_t begin = 0; begin < run.length; begin += kChunk) {
-    e += static_cast<int32_t>(WeighChunk(run, begin, std::min(kChunk, run.length - begin), line, unused).sse);
-  }
-  return e;
-}
-
 // The lowest and highest projection c^T qa of a run's colors.
 std::pair<int32_t, int32_t> ExtentScalar(const Run& run, const int32_t qa[3]) {
   int32_t lowest = INT32_MAX, highest = INT32_MIN;
@@ -318,11 +300,11 @@ BlockFit FitWeights(const Run& run, const int64_t sums[3], const Endpoints& ends
 }
 
 // BlockFitter::ChromaError of a run whose norms are c^T C c (C = kChromaWeights), for wider blocks:
-// ChooseWeight by the fitter's projection, the palette's error in C.
+// ChooseWeight by the fitter's projection, the palette's error in C, stopping past `stop`.
 template <int kBits>
-int64_t ChromaOfRun(const Run& run, const Endpoints& ends) {
+uint64_t ChromaOfRun(const Run& run, const Endpoints& ends, uint64_t stop) {
   const Line line = MakeLine<kBits>(ends, kChromaWeights);
-  return run.r ? SignedErrorAvx2(run, line) : SignedErrorScalar(run, line);
+  return run.r ? ErrorAvx2(run, line, stop) : ErrorScalar(run, line, stop);
 }
 
 }  // namespace
@@ -430,24 +412,21 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
   }
 }
 
-uint64_t BlockFitter::ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const {
+uint64_t BlockFitter::ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends, uint64_t give_up_above) const {
   if (length == 1 && ends.a == ends.b && ends.a == colors_[begin]) return 0;  // a leaf as fitted: exact
-  int64_t e;
   if (bits == 0 || ends.a == ends.b) {
     const Sums sums = RangeSums(begin, begin + length);
     const int64_t a[3] = {ends.a.r, ends.a.g, ends.a.b};
-    e = ErrorAbout(sums.s, sums.ss, length, a, kChromaWeights);
-  } else {
-    const auto plane = [&](int k) { return avx2_ ? planes_[k].data() + begin : nullptr; };
-    const Run run{colors_.data() + begin, plane(0), plane(1), plane(2), chroma_norms_.data() + begin, length};
-    switch (bits) {
-      case 1: e = ChromaOfRun<1>(run, ends); break;
-      case 2: e = ChromaOfRun<2>(run, ends); break;
-      case 3: e = ChromaOfRun<3>(run, ends); break;
-      default: e = ChromaOfRun<4>(run, ends); break;
-    }
+    return static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, length, a, kChromaWeights));
   }
-  return static_cast<uint64_t>(std::max<int64_t>(e, 0));
+  const auto plane = [&](int k) { return avx2_ ? planes_[k].data() + begin : nullptr; };
+  const Run run{colors_.data() + begin, plane(0), plane(1), plane(2), chroma_norms_.data() + begin, length};
+  switch (bits) {
+    case 1: return ChromaOfRun<1>(run, ends, give_up_above);
+    case 2: return ChromaOfRun<2>(run, ends, give_up_above);
+    case 3: return ChromaOfRun<3>(run, ends, give_up_above);
+    default: return ChromaOfRun<4>(run, ends, give_up_above);
+  }
 }
 
 }  // namespace pointdag

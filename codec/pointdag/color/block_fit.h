@@ -48,8 +48,11 @@ class BlockFitter {
 
   // The chroma part the variable-rate tree adds to a block's error (block_codec.cc): the sum over colors
   // [begin, begin + length) of d^T kChromaWeights d, d = c - Interpolate(ends, ChooseWeight(c, ends, bits),
-  // bits), clamped at 0. From the sums alone where every color is rebuilt as A (0 bits, or A = B).
-  uint64_t ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends) const;
+  // bits). From the sums alone where every color is rebuilt as A (0 bits, or A = B). Every term is
+  // >= 0 (kChromaWeights is positive semidefinite), so a walk may stop once its sum passes
+  // `give_up_above`, reporting that sum (the merge passes only need to know that a candidate fails).
+  uint64_t ChromaError(uint32_t begin, uint32_t length, int bits, const Endpoints& ends,
+                       uint64_t give_up_above = UINT64_MAX) const;
 
  private:
   struct Sums {
