@@ -43,9 +43,15 @@ const BlockFit& FitOf(const BlockFitter& fitter, Candidate& c, int bits) {
 // As gpu/shaders/block_common.glsl (WeighedError).
 constexpr uint64_t kChromaTimes = 4;
 
+// The chroma part of candidate c fitted as `fit`: the fit's own where it has it, else a walk that
+// may stop once it passes `give_up_above`.
+uint64_t ChromaOf(const BlockFitter& fitter, const Candidate& c, const BlockFit& fit, int bits, uint64_t give_up_above = UINT64_MAX) {
+  return fit.chroma != kUnknownChroma ? fit.chroma : fitter.ChromaError(c.start, c.length, bits, fit.ends, give_up_above);
+}
+
 uint64_t WeighedError(const BlockFitter& fitter, Candidate& c, int bits) {
   const BlockFit& fit = FitOf(fitter, c, bits);
-  if (!c.chroma) c.chroma = fitter.ChromaError(c.start, c.length, bits, fit.ends);
+  if (!c.chroma) c.chroma = ChromaOf(fitter, c, fit, bits);
   return fit.sse + kChromaTimes * *c.chroma;
 }
 
@@ -82,7 +88,7 @@ std::vector<Candidate> MergePasses(const BlockFitter& fitter, std::vector<Candid
           Candidate merged{blocks[i].start, length, fit};
           // Most weighed trials that fail here do so on their chroma part: its walk stops once it passes what is left.
           const uint64_t chroma_limit = (limit - fit.sse) / kChromaTimes;
-          if (weighed) merged.chroma = fitter.ChromaError(merged.start, length, bits, fit.ends, chroma_limit);
+          if (weighed) merged.chroma = ChromaOf(fitter, merged, fit, bits, chroma_limit);
           if (!weighed || *merged.chroma <= chroma_limit) {
             out.push_back(std::move(merged));
             merged_any = true;

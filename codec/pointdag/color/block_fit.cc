@@ -353,7 +353,7 @@ inline BlockFitter::Sums BlockFitter::RangeSums(uint32_t begin, uint32_t end) co
 
 BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t give_up_above) const {
   // A leaf (the tree fits every color alone at every width): the mean path's result, without the sums.
-  if (length == 1) return {{colors_[begin], colors_[begin]}, 0};
+  if (length == 1) return {{colors_[begin], colors_[begin]}, 0, 0};
   const int64_t n = length;
   const Sums sums = RangeSums(begin, begin + length);
   // One color for the whole block (0 bits, or all colors alike): the mean, whose error follows from the sums alone.
@@ -361,7 +361,8 @@ BlockFit BlockFitter::Fit(uint32_t begin, uint32_t length, int bits, uint64_t gi
     const RoundDivider divide(n);
     const Rgb8 c{divide.Mean(sums.s[0]), divide.Mean(sums.s[1]), divide.Mean(sums.s[2])};
     const int64_t a[3] = {c.r, c.g, c.b};
-    return {{c, c}, static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kErrorWeights))};
+    return {{c, c}, static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kErrorWeights)),
+            static_cast<uint64_t>(ErrorAbout(sums.s, sums.ss, n, a, kChromaWeights))};
   };
   if (bits == 0) return mean();
   // Covariance scaled by n^2: M[j][k] = n * sum(c_j c_k) - sum(c_j) sum(c_k).

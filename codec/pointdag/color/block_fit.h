@@ -28,9 +28,15 @@ struct Endpoints {
   friend bool operator==(const Endpoints&, const Endpoints&) = default;
 };
 
+constexpr uint64_t kUnknownChroma = UINT64_MAX;
+
 struct BlockFit {
   Endpoints ends;
   uint64_t sse = 0;  // BlockError summed over the block's colors
+  // BlockFitter::ChromaError of `ends` where the fit had it from the sums for a few more products
+  // (every color rebuilt as A: a leaf, 0 bits, colors all alike), else kUnknownChroma: the
+  // variable-rate tree tries hundreds of thousands of 0-bit merges, each also judged by it.
+  uint64_t chroma = kUnknownChroma;
 };
 
 // Fits blocks inside one run of colors (a macro block). Prefix sums of the colors and of their
