@@ -173,7 +173,14 @@ std::vector<ColorBlock> VariableRateMacroBlock(const BlockFitter& fitter, uint32
         }
       }
       const int bits = static_cast<int>(level);
-      const uint64_t own = kTenthsPerSse * WeighedError(fitter, c, bits) + threshold.scaled * RateTenths(c.length, bits);
+      // A block whose bits alone cost what its children do loses whatever its error: not fitted (most
+      // 1-bit refits, which nothing but the cut weighs).
+      const uint64_t rate = threshold.scaled * RateTenths(c.length, bits);
+      if (rate >= children) {
+        best[level].push_back(Best{children, false});
+        continue;
+      }
+      const uint64_t own = kTenthsPerSse * WeighedError(fitter, c, bits) + rate;
       best[level].push_back(own < children ? Best{own, true} : Best{children, false});
     }
   }
