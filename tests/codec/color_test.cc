@@ -82,13 +82,20 @@ TEST(BlockFit, ErrorIsTheReconstructionsAndRangesAreIndependent) {
 }
 
 // ChromaError is the per-color sum it stands for (ChooseWeight, Interpolate, kChromaWeights), for
-// fitted and arbitrary endpoints (A = B included) and lengths off the AVX2 chunk.
+// fitted and arbitrary endpoints (A = B included) and lengths off the AVX2 chunk; a fit that knows
+// its chroma part (leaves, 0 bits) knows that sum.
 TEST(BlockFit, ChromaErrorIsThePerColorSum) {
   const std::vector<Rgb8> colors = SkewedRandomColors(11);
   const BlockFitter fitter(colors);
   for (int bits = 0; bits <= kMaxWeightBits; ++bits) {
     for (const uint32_t length : {1u, 7u, 9u, 200u}) {
-      const Endpoints fitted = fitter.Fit(40, length, bits).ends;
+      const BlockFit fit = fitter.Fit(40, length, bits);
+      const Endpoints fitted = fit.ends;
+      if (bits == 0 || length == 1) {
+        EXPECT_EQ(fit.chroma, fitter.ChromaError(40, length, bits, fitted)) << bits << " bits, length " << length;
+      } else {
+        EXPECT_EQ(fit.chroma, kUnknownChroma);
+      }
       for (const Endpoints& ends : {fitted, Endpoints{{250, 3, 7}, {2, 60, 131}}, Endpoints{{9, 9, 200}, {9, 9, 200}}}) {
         int64_t sum = 0;
         for (uint32_t i = 40; i < 40 + length; ++i) {
@@ -96,7 +103,8 @@ TEST(BlockFit, ChromaErrorIsThePerColorSum) {
           const int32_t d[3] = {colors[i].r - p.r, colors[i].g - p.g, colors[i].b - p.b};
           for (int j = 0; j < 3; ++j) sum += d[j] * (kChromaWeights[j][0] * d[0] + kChromaWeights[j][1] * d[1] + kChromaWeights[j][2] * d[2]);
         }
-        const uint64_t exact = static_cast<uint64_t>(std::max<int64_t>(sum, 0));
+        ASSERT_GE(sum, 0);  // kChromaWeights is positive semidefinite
+        const uint64_t exact = static_cast<uint64_t>(sum);
         EXPECT_EQ(fitter.ChromaError(40, length, bits, ends), exact) << bits << " bits, length " << length;
         // Given up at the sum or below it: the sum, or a sum above where it gave up.
         EXPECT_EQ(fitter.ChromaError(40, length, bits, ends, exact), exact);
