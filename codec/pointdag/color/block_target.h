@@ -6,7 +6,8 @@
 // locally. Any run of whole blocks inside a macro block can be encoded again on its own, so the
 // encode is cut into ~32 units at block boundaries, and only the units whose error must change
 // are encoded again at a scaled threshold (largest error first); a raised unit is kept only where
-// the total still meets the target. The target is met by the blocks' exact reconstruction (the
+// the total still meets the target, and raising (for bytes only) stops after three rounds or at a
+// round that left the error no larger. The target is met by the blocks' exact reconstruction (the
 // decoder's), never by the prediction: when corrections do not reach it, units fall back to
 // threshold 0 (exact). Arrays too small to sample start from 1.5x (fixed rate) or 2.5x (variable rate) the MSE the target allows.
 #pragma once
