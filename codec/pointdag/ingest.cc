@@ -9,8 +9,8 @@
 #include <malloc.h>
 #endif
 
-#include "pointdag/compare/point_metrics.h"
 #include "pointdag/read/remembering_reader.h"
+#include "pointdag/voxelize/point_spacing.h"
 
 namespace pointdag {
 namespace {

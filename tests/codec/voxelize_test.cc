@@ -1,7 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
 #include "pointdag/read/memory_reader.h"
 #include "pointdag/voxelize/morton.h"
+#include "pointdag/voxelize/point_spacing.h"
 #include "pointdag/voxelize/radix_sort.h"
 #include "pointdag/voxelize/voxelizer.h"
 #include "test_util.h"
@@ -36,6 +42,75 @@ StatusOr<VoxelGrid> VoxelizeInMemory(std::vector<std::array<double, 3>> xyz, std
                         VoxelizeOptions options) {
   MemoryScanReader reader(std::move(xyz), std::move(rgb));
   return Voxelize(reader, options);
+}
+
+// MedianPointSpacing's contract by brute force: every point's nearest other point, duplicates left out.
+double BruteForceSpacing(const std::vector<std::array<double, 3>>& points) {
+  std::vector<double> nearest;
+  for (size_t i = 0; i < points.size(); ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < points.size(); ++j) {
+      if (j == i) continue;
+      const double dx = points[i][0] - points[j][0], dy = points[i][1] - points[j][1], dz = points[i][2] - points[j][2];
+      best = std::min(best, dx * dx + dy * dy + dz * dz);
+    }
+    if (best > 0) nearest.push_back(best);
+  }
+  if (nearest.empty()) return 0;
+  std::nth_element(nearest.begin(), nearest.begin() + static_cast<long>(nearest.size() / 2), nearest.end());
+  return std::sqrt(nearest[nearest.size() / 2]);
+}
+
+// Shapes that stress the grid: its cells sized for surfaces, runs split over two threads (from
+// 4,096 points), isolated points searched in further shells and by brute force, UTM-sized offsets.
+TEST(PointSpacing, EqualsBruteForceOnSurfacesVolumesLinesDuplicatesAndOutliers) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::normal_distribution<double> noise(0, 1);
+  for (int shape = 0; shape < 8; ++shape) {
+    SCOPED_TRACE(shape);
+    std::vector<std::array<double, 3>> points;
+    const size_t n = shape == 6 ? 40 : 5000;
+    const double x0 = shape % 2 ? 870000.0 : 0.0, y0 = shape % 2 ? 6618000.0 : 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const double u = unit(rng), v = unit(rng), w = unit(rng);
+      switch (shape) {
+        case 0: points.push_back({u, v, w}); break;                                               // a volume
+        case 1: points.push_back({x0 + 500 * u, y0 + 500 * v, 30 + 0.05 * noise(rng)}); break;  // terrain
+        case 2: points.push_back({std::round(40 * u) / 4, std::round(40 * v) / 4, 0}); break;   // a lattice: duplicates, ties
+        case 3: points.push_back({x0 + 100 * u, y0 + 0.3 * u, 2.0}); break;                     // a line
+        case 4:                                                                                   // a dense cluster, sparse far points
+          points.push_back(i % 10 ? std::array<double, 3>{0.01 * u, 0.01 * v, 0.01 * w} : std::array<double, 3>{1000 * u, 1000 * v, 1000 * w});
+          break;
+        case 5:  // an outlier far from a cube
+          points.push_back({x0 + u, y0 + v, w});
+          if (i == 0) points.push_back({x0 + 1e4, y0 + 1e4, 1e4});
+          break;
+        case 6: points.push_back({std::floor(3 * u), 0, 0}); break;  // few points, in three places
+        default: points.push_back({10 * u, 10 * v, std::floor(4 * w) * 0.37}); break;  // stacked planes
+      }
+    }
+    EXPECT_EQ(MedianPointSpacing(points), BruteForceSpacing(points));
+  }
+  // Small clouds, where the median hangs on a few points' nearest neighbours: boxes of any aspect,
+  // some points snapped to a coarse lattice (equal distances, duplicates).
+  for (int trial = 0; trial < 400; ++trial) {
+    SCOPED_TRACE(trial);
+    const size_t n = 3 + rng() % 80;
+    const std::array<double, 3> size = {std::exp(6 * unit(rng) - 3), std::exp(6 * unit(rng) - 3), std::exp(6 * unit(rng) - 3)};
+    std::vector<std::array<double, 3>> points;
+    for (size_t i = 0; i < n; ++i) {
+      std::array<double, 3> p = {size[0] * unit(rng), size[1] * unit(rng), size[2] * unit(rng)};
+      if (trial % 3 == 0) {
+        for (double& x : p) x = std::round(x * 4) / 4;
+      }
+      points.push_back(p);
+    }
+    ASSERT_EQ(MedianPointSpacing(points), BruteForceSpacing(points));
+  }
+  EXPECT_EQ(MedianPointSpacing(std::vector<std::array<double, 3>>(5, {1, 2, 3})), 0.0);  // all coincide
+  EXPECT_EQ(MedianPointSpacing(std::vector<std::array<double, 3>>{{1, 2, 3}}), 0.0);
+  EXPECT_EQ(MedianPointSpacing(std::vector<std::array<double, 3>>{{0, 0, 0}, {3, 4, 0}}), 5.0);
 }
 
 TEST(Voxelizer, MergesPointsOfAVoxelWithTheirMeanColor) {

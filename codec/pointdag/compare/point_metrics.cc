@@ -3,7 +3,6 @@
 #include <flann/flann.hpp>
 
 #include <cmath>
-#include <thread>
 
 #include "pointdag/read/scan_reader.h"
 
@@ -81,42 +80,6 @@ double OriginalCorrespondence::ColorPsnrY(std::span<const Rgb8> voxel_colors) co
   forward /= static_cast<double>(original_colors_.size());
   backward /= static_cast<double>(voxel_colors.size());
   return PsnrFromMse(std::max(forward, backward));
-}
-
-double MedianPointSpacing(std::span<const std::array<double, 3>> points) {
-  if (points.size() < 2) return 0.0;
-  std::vector<double> data;
-  data.reserve(3 * points.size());
-  for (const auto& p : points) data.insert(data.end(), p.begin(), p.end());
-  flann::Matrix<double> data_m(data.data(), points.size(), 3);
-  flann::Index<flann::L2_Simple<double>> tree(data_m, flann::KDTreeSingleIndexParams(12));
-  tree.buildIndex();
-  std::vector<size_t> idx(2 * points.size());
-  std::vector<double> dist(2 * points.size());
-  const flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
-  // Exact searches (one tree, unlimited checks), so splitting the queries changes no distance: the
-  // second half on a thread of its own. A plain thread, not a TBB loop: TSan sees a thread's start
-  // and join, not Debian's uninstrumented libtbb's task edges, and flann's deep recursion made every
-  // such false report slow to symbolize.
-  const auto search = [&](size_t first, size_t end) {
-    flann::Matrix<double> queries(data.data() + 3 * first, end - first, 3);
-    flann::Matrix<size_t> idx_m(idx.data() + 2 * first, end - first, 2);
-    flann::Matrix<double> dist_m(dist.data() + 2 * first, end - first, 2);
-    tree.knnSearch(queries, idx_m, dist_m, 2, params);
-  };
-  const size_t half = points.size() / 2;
-  std::thread second(search, half, points.size());
-  search(0, half);
-  second.join();
-  // The first neighbour is the point itself; duplicates (distance 0) say nothing about spacing.
-  std::vector<double> nearest;
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (dist[2 * i + 1] > 0) nearest.push_back(dist[2 * i + 1]);
-  }
-  if (nearest.empty()) return 0.0;
-  auto mid = nearest.begin() + static_cast<long>(nearest.size() / 2);
-  std::nth_element(nearest.begin(), mid, nearest.end());
-  return std::sqrt(*mid);
 }
 
 }  // namespace pointdag

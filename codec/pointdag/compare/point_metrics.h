@@ -35,7 +35,5 @@ class OriginalCorrespondence {
   double mse_original_to_voxels_ = 0, mse_voxels_to_original_ = 0, peak_ = 1;
 };
 
-// Median distance from each point to its nearest distinct neighbour (0 when there is none).
-double MedianPointSpacing(std::span<const std::array<double, 3>> points);
 
 }  // namespace pointdag
