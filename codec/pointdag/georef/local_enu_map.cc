@@ -13,21 +13,26 @@ constexpr int kFitSide = 9, kFitHeights = 3, kCheckSide = 17, kCheckHeights = 5;
 
 double Node(int i, int n) { return -1.0 + 2.0 * i / (n - 1); }
 
-}  // namespace
-
-std::array<double, LocalEnuMap::kTerms> LocalEnuMap::Basis(double u, double v, double w) {
-  std::array<double, kTerms> out{};
+// The basis's terms in its order, each handed to `use`: u^i v^(d-i) w^k, d up to 4, 3, 1 for k = 0, 1, 2.
+template <class Use>
+void ForEachTerm(double u, double v, double w, Use&& use) {
   const double up[5] = {1, u, u * u, u * u * u, u * u * u * u};
   const double vp[5] = {1, v, v * v, v * v * v, v * v * v * v};
   const double wp[3] = {1, w, w * w};
   constexpr int kMaxUvDegree[3] = {4, 3, 1};  // by the power of w
-  int n = 0;
   for (int k = 0; k < 3; ++k) {
-    const double wk = wp[k];
     for (int d = 0; d <= kMaxUvDegree[k]; ++d) {
-      for (int i = d; i >= 0; --i) out[n++] = up[i] * vp[d - i] * wk;
+      for (int i = d; i >= 0; --i) use(up[i] * vp[d - i] * wp[k]);
     }
   }
+}
+
+}  // namespace
+
+std::array<double, LocalEnuMap::kTerms> LocalEnuMap::Basis(double u, double v, double w) {
+  std::array<double, kTerms> out{};
+  int n = 0;
+  ForEachTerm(u, v, w, [&](double term) { out[n++] = term; });
   return out;
 }
 
@@ -80,15 +85,18 @@ std::optional<LocalEnuMap> LocalEnuMap::Fit(const Bounds& box, const ExactFn& ex
   return map;
 }
 
+// The three sums term by term as the terms come: no basis array in between (half the time a
+// point; every sum adds the same products in the same order as before, so the same bits).
 std::array<double, 3> LocalEnuMap::Evaluate(const std::array<double, 3>& p) const {
-  const auto basis = Basis((p[0] - centre_[0]) / half_[0], (p[1] - centre_[1]) / half_[1], (p[2] - centre_[2]) / half_[2]);
-  std::array<double, 3> out{};
-  for (int c = 0; c < 3; ++c) {
-    double sum = 0;
-    for (int t = 0; t < kTerms; ++t) sum += coefficients_[c][t] * basis[t];
-    out[c] = sum;
-  }
-  return out;
+  double e = 0, n = 0, u = 0;
+  int t = 0;
+  ForEachTerm((p[0] - centre_[0]) / half_[0], (p[1] - centre_[1]) / half_[1], (p[2] - centre_[2]) / half_[2], [&](double term) {
+    e += coefficients_[0][t] * term;
+    n += coefficients_[1][t] * term;
+    u += coefficients_[2][t] * term;
+    ++t;
+  });
+  return {e, n, u};
 }
 
 bool LocalEnuMap::Inside(const std::array<double, 3>& p) const {
