@@ -27,6 +27,7 @@ namespace {
 
 constexpr uint64_t kSmallBodyLimit = 1 << 20;
 constexpr uint64_t kDrainLimit = 8 << 20;
+constexpr size_t kBodyReadBytes = 64 << 10;  // what Beast reads in one call at most
 constexpr auto kAcceptBackoff = std::chrono::milliseconds(100);
 const std::string kUploadRoute = "/v1/datasets";
 
@@ -318,6 +319,9 @@ asio::awaitable<HttpResponse> HttpServer::Impl::ReadUpload(beast::tcp_stream& st
     keep_alive = false;
     co_return service.Error(500, "cannot store the upload: " + ec.message(), kUploadRoute);
   }
+  // Beast reads at most the buffer's spare capacity (up to 64 KiB) a call: left as the header made it,
+  // a body came in ~4 KiB reads, five system calls each (13.7 MB: 3,450 reads, ~25 ms to the 202).
+  buffer.reserve(buffer.size() + kBodyReadBytes);
   ec = co_await ReadBodyAtMinimumRate(stream, buffer, body_parser);
   body_parser.get().body().close();
   if (ec == http::error::body_limit) {
