@@ -194,11 +194,15 @@ TEST(Voxelizer, VoxelSizeAfterTheSurveyGivesTheSameGrid) {
 TEST(RadixSort, SortsLikeStdSortWithDuplicatesAndEveryWidth) {
   std::mt19937_64 rng(3);
   for (int bits : {1, 7, 8, 9, 30, 63}) {
-    for (size_t n : {size_t{0}, size_t{1}, size_t{63}, size_t{64}, size_t{5000}, size_t{100000}}) {
+    // Sizes about the insertion sort's limit, the scratch buffer's (kRadixScratchItems) and past it
+    // (in-place passes first, then the scratch sort on the parts).
+    for (size_t n : {size_t{0}, size_t{1}, kInsertionItems, kInsertionItems + 1, size_t{64}, size_t{5000},
+                     kRadixScratchItems, kRadixScratchItems + 1, size_t{100000}, size_t{300000}}) {
       std::vector<std::pair<uint64_t, uint32_t>> items(n);
-      // Few distinct keys for some widths: many duplicates, deep recursion on equal keys.
+      // Few distinct keys for some sizes: many duplicates, deep recursion on equal keys.
       const uint64_t mask = bits == 63 ? (uint64_t{1} << 63) - 1 : (uint64_t{1} << bits) - 1;
-      for (size_t i = 0; i < n; ++i) items[i] = {rng() & mask & (n > 5000 ? ~uint64_t{0} : 0xFFF0F0), static_cast<uint32_t>(i)};
+      const uint64_t few = n == 5000 ? 0xFFF0F0 : n == 300000 ? 0xF000000F : ~uint64_t{0};
+      for (size_t i = 0; i < n; ++i) items[i] = {rng() & mask & few, static_cast<uint32_t>(i)};
       auto expected = items;
       std::sort(expected.begin(), expected.end());
       RadixSortInPlace(std::span(items), bits, [](const auto& item) { return item.first; });
