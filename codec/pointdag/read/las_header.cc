@@ -1,5 +1,6 @@
 #include "pointdag/read/las_header.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -206,20 +207,40 @@ Status LasRecordLayout::Append(const unsigned char* records, size_t n, uint64_t 
   const size_t base = batch.xyz.size();
   batch.xyz.resize(base + n);
   if (rgb_offset != 0) batch.rgb.resize(base + n);
+  return Decode(records, n, first_index, batch.xyz.data() + base, rgb_offset != 0 ? batch.rgb.data() + base : nullptr,
+                max_color_seen);
+}
+
+Status LasRecordLayout::Decode(const unsigned char* records, size_t n, uint64_t first_index,
+                               std::array<double, 3>* xyz, std::array<uint16_t, 3>* rgb,
+                               uint16_t& max_color_seen) const {
+  // Locals, not members or references: the stores to xyz and rgb cannot change them, so they stay
+  // in registers (a uint16_t reference could alias an rgb channel and was reloaded every point).
+  const std::array<double, 3> s = scale, o = offset;
+  const size_t length = record_length;
+  bool finite = true;
   for (size_t i = 0; i < n; ++i) {
-    const unsigned char* rec = records + i * record_length;
-    auto& p = batch.xyz[base + i];
-    for (int axis = 0; axis < 3; ++axis) p[axis] = LoadLE<int32_t>(rec + 4 * axis) * scale[axis] + offset[axis];
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      return Malformed("point " + Num(first_index + i) + " has a coordinate that is not finite");
-    }
-    if (rgb_offset != 0) {
-      auto& c = batch.rgb[base + i];
+    const unsigned char* rec = records + i * length;
+    auto& p = xyz[i];
+    for (int axis = 0; axis < 3; ++axis) p[axis] = LoadLE<int32_t>(rec + 4 * axis) * s[axis] + o[axis];
+    finite &= std::isfinite(p[0]) & std::isfinite(p[1]) & std::isfinite(p[2]);
+  }
+  if (!finite) {
+    size_t i = 0;
+    while (std::isfinite(xyz[i][0]) && std::isfinite(xyz[i][1]) && std::isfinite(xyz[i][2])) ++i;
+    return Malformed("point " + Num(first_index + i) + " has a coordinate that is not finite");
+  }
+  if (rgb) {
+    const unsigned char* channels = records + rgb_offset;
+    uint16_t max = max_color_seen;
+    for (size_t i = 0; i < n; ++i, channels += length) {
+      auto& c = rgb[i];
       for (int ch = 0; ch < 3; ++ch) {
-        c[ch] = LoadLE<uint16_t>(rec + rgb_offset + 2 * ch);
-        max_color_seen = std::max(max_color_seen, c[ch]);
+        c[ch] = LoadLE<uint16_t>(channels + 2 * ch);
+        max = std::max(max, c[ch]);
       }
     }
+    max_color_seen = max;
   }
   return Status::Ok();
 }

@@ -45,6 +45,9 @@ struct LasRecordLayout {
   // the first record's number in the file, for the message about a non-finite coordinate.
   Status Append(const unsigned char* records, size_t n, uint64_t first_index, PointBatch& batch,
                 uint16_t& max_color_seen) const;
+  // The same into n points at xyz (and rgb unless null); a non-finite point may leave the rest unset.
+  Status Decode(const unsigned char* records, size_t n, uint64_t first_index, std::array<double, 3>* xyz,
+                std::array<uint16_t, 3>* rgb, uint16_t& max_color_seen) const;
 };
 
 // Reads and checks the header of an open LAS/LAZ file of `file_size` bytes; fills `info`.

@@ -48,14 +48,18 @@ Status LasReader::Rewind() {
 }
 
 StatusOr<size_t> LasReader::Read(PointBatch& batch, size_t max_points) {
-  batch.clear();
   const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, header_.point_count - next_point_));
+  // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
+  batch.xyz.resize(n);
+  batch.rgb.resize(layout_.rgb_offset != 0 ? n : 0);
   if (n == 0) return size_t{0};
   buffer_.resize(n * layout_.record_length);
   if (std::fread(buffer_.data(), layout_.record_length, n, file_) != n) {
+    batch.clear();
     return Truncated("LAS point data ends early, at point " + Num(next_point_) + " of " + Num(header_.point_count));
   }
-  RETURN_IF_ERROR(layout_.Append(buffer_.data(), n, next_point_, batch, max_color_seen_));
+  RETURN_IF_ERROR(layout_.Decode(buffer_.data(), n, next_point_, batch.xyz.data(),
+                                 layout_.rgb_offset != 0 ? batch.rgb.data() : nullptr, max_color_seen_));
   next_point_ += n;
   return n;
 }

@@ -1,11 +1,14 @@
 #include "pointdag/read/ply_reader.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string_view>
+
+#include "pointdag/read/byte_io.h"
 
 namespace pointdag {
 namespace {
@@ -74,37 +77,26 @@ class PlainPlyReader final : public ScanReader {
   ~PlainPlyReader() override { std::fclose(file_); }
 
   StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override {
-    batch.clear();
     const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.point_count - next_));
+    // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
+    batch.xyz.resize(n);
+    batch.rgb.resize(info_.has_color ? n : 0);
     buffer_.resize(n * layout_.record);
     if (std::fread(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
+      batch.clear();
       return Truncated("PLY data ends early, at point " + std::to_string(next_) + " of " + std::to_string(info_.point_count));
     }
-    batch.xyz.resize(n);
-    if (info_.has_color) batch.rgb.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      const unsigned char* record = buffer_.data() + i * layout_.record;
-      for (int axis = 0; axis < 3; ++axis) {
-        const unsigned char* at = record + layout_.xyz[axis];
-        double v;
-        if (layout_.xyz_double[axis]) {
-          std::memcpy(&v, at, 8);
-        } else {
-          float f;
-          std::memcpy(&f, at, 4);
-          v = f;
-        }
-        if (!std::isfinite(v)) return Malformed("point " + std::to_string(next_ + i) + " has a coordinate that is not finite");
-        batch.xyz[i][axis] = v;
-      }
-      if (info_.has_color) {
-        for (int ch = 0; ch < 3; ++ch) {
-          const uint16_t c = record[*layout_.rgb[ch]];
-          batch.rgb[i][ch] = c;
-          max_color_seen_ = std::max(max_color_seen_, c);
-        }
-      }
+    const bool finite = layout_.xyz_double[0] && layout_.xyz_double[1] && layout_.xyz_double[2]
+                            ? DecodeXyz<double>(n, batch)
+                        : !layout_.xyz_double[0] && !layout_.xyz_double[1] && !layout_.xyz_double[2]
+                            ? DecodeXyz<float>(n, batch)
+                            : DecodeMixedXyz(n, batch);
+    if (!finite) {
+      size_t i = 0;
+      while (std::isfinite(batch.xyz[i][0]) && std::isfinite(batch.xyz[i][1]) && std::isfinite(batch.xyz[i][2])) ++i;
+      return Malformed("point " + std::to_string(next_ + i) + " has a coordinate that is not finite");
     }
+    if (info_.has_color) DecodeRgb(n, batch);
     next_ += n;
     return n;
   }
@@ -121,6 +113,46 @@ class PlainPlyReader final : public ScanReader {
   Layout layout_;
   uint64_t next_ = 0;
   std::vector<unsigned char> buffer_;
+
+  // The loops below keep the layout in locals: stores to the batch cannot change them, so they stay
+  // in registers. Each returns whether every coordinate is finite.
+  template <class Coord>
+  bool DecodeXyz(size_t n, PointBatch& batch) const {
+    const size_t record = layout_.record, x = layout_.xyz[0], y = layout_.xyz[1], z = layout_.xyz[2];
+    const unsigned char* at = buffer_.data();
+    bool finite = true;
+    for (size_t i = 0; i < n; ++i, at += record) {
+      const Coord v[3] = {LoadLE<Coord>(at + x), LoadLE<Coord>(at + y), LoadLE<Coord>(at + z)};
+      finite &= std::isfinite(v[0]) & std::isfinite(v[1]) & std::isfinite(v[2]);
+      batch.xyz[i] = {v[0], v[1], v[2]};
+    }
+    return finite;
+  }
+
+  bool DecodeMixedXyz(size_t n, PointBatch& batch) const {
+    bool finite = true;
+    for (size_t i = 0; i < n; ++i) {
+      const unsigned char* record = buffer_.data() + i * layout_.record;
+      for (int axis = 0; axis < 3; ++axis) {
+        const unsigned char* at = record + layout_.xyz[axis];
+        const double v = layout_.xyz_double[axis] ? LoadLE<double>(at) : LoadLE<float>(at);
+        finite &= std::isfinite(v);
+        batch.xyz[i][axis] = v;
+      }
+    }
+    return finite;
+  }
+
+  void DecodeRgb(size_t n, PointBatch& batch) {
+    const size_t record = layout_.record, r = *layout_.rgb[0], g = *layout_.rgb[1], b = *layout_.rgb[2];
+    const unsigned char* at = buffer_.data();
+    unsigned char max = 0;
+    for (size_t i = 0; i < n; ++i, at += record) {
+      batch.rgb[i] = {at[r], at[g], at[b]};
+      max = std::max({max, at[r], at[g], at[b]});
+    }
+    max_color_seen_ = std::max<uint16_t>(max_color_seen_, max);
+  }
 };
 
 }  // namespace
