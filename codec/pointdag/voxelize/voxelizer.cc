@@ -54,15 +54,27 @@ uint8_t MeanChannel(uint64_t sum, uint64_t points, uint64_t divisor) {
 }
 
 void ReduceOnCpu(std::vector<KeyedPoint>& points, const ScanSurvey& survey, int key_bits, VoxelGrid& grid) {
-  // In place: a scratch copy would double the peak memory of the whole pipeline. The order among a
-  // voxel's points does not matter (integer sums), so any sort gives the same voxels.
+  // In place (its scratch is bounded): a scratch copy would double the peak memory of the whole
+  // pipeline. The order among a voxel's points does not matter (integer sums), so any sort gives
+  // the same voxels.
   RadixSortInPlace(std::span(points), key_bits, [](const KeyedPoint& p) { return p.key; });
+  size_t voxels = points.empty() ? 0 : 1;
+  for (size_t i = 1; i < points.size(); ++i) voxels += points[i].key != points[i - 1].key;
+  // Room for this chunk's voxels at once, growing geometrically across chunks as push_back would.
+  const auto make_room = [voxels](auto& v) {
+    if (v.capacity() < v.size() + voxels) v.reserve(std::max(v.size() + voxels, 2 * v.capacity()));
+  };
+  make_room(grid.morton);
+  if (survey.has_color) make_room(grid.colors);
   const uint64_t divisor = survey.color_bits > 8 ? 257 : 1;
   for (size_t begin = 0; begin < points.size();) {
     size_t end = begin + 1;
     while (end < points.size() && points[end].key == points[begin].key) ++end;
     grid.morton.push_back(points[begin].key);
-    if (survey.has_color) {
+    if (survey.has_color && end - begin == 1 && divisor == 1) {
+      const auto& rgb = points[begin].rgb;  // the mean of one 8-bit value is itself
+      grid.colors.push_back({static_cast<uint8_t>(rgb[0]), static_cast<uint8_t>(rgb[1]), static_cast<uint8_t>(rgb[2])});
+    } else if (survey.has_color) {
       uint64_t sum[3] = {0, 0, 0};
       for (size_t i = begin; i < end; ++i) {
         for (int ch = 0; ch < 3; ++ch) sum[ch] += points[i].rgb[ch];
@@ -229,31 +241,37 @@ StatusOr<VoxelGrid> Voxelize(ScanReader& reader, const VoxelizeOptions& options)
   PointBatch batch;
   std::vector<std::array<uint32_t, 3>> cells;
   std::vector<uint64_t> codes;
+  const auto cell_of = [&](const std::array<double, 3>& xyz) {
+    std::array<uint32_t, 3> cell;
+    for (int axis = 0; axis < 3; ++axis) {
+      // The cast truncates, which is the floor on [0, max_cell], and the clamp sends the rest to
+      // the ends as the floor did (std::floor without SSE4.1 is a dozen instructions per axis).
+      const double c = (xyz[axis] - grid.origin[axis]) * inv_size;
+      cell[axis] = static_cast<uint32_t>(std::clamp(c, 0.0, max_cell));
+    }
+    return cell;
+  };
   for (;;) {
     ASSIGN_OR_RETURN(size_t n, reader.Read(batch, options.batch_points));
     if (n == 0) break;
-    cells.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      for (int axis = 0; axis < 3; ++axis) {
-        // The cast truncates, which is the floor on [0, max_cell], and the clamp sends the rest to
-        // the ends as the floor did (std::floor without SSE4.1 is a dozen instructions per axis).
-        const double c = (batch.xyz[i][axis] - grid.origin[axis]) * inv_size;
-        cells[i][axis] = static_cast<uint32_t>(std::clamp(c, 0.0, max_cell));
-      }
-    }
     if (device) {
+      cells.resize(n);
+      for (size_t i = 0; i < n; ++i) cells[i] = cell_of(batch.xyz[i]);
       ASSIGN_OR_RETURN(codes, gpu::MortonCodes(*device, cells));
     } else {
       codes.resize(n);
-      for (size_t i = 0; i < n; ++i) codes[i] = MortonEncode(cells[i][0], cells[i][1], cells[i][2]);
-    }
-    for (size_t i = 0; i < n; ++i) {
-      const KeyedPoint p{codes[i], survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}};
-      if (grid.chunk_levels > 0) {
-        RETURN_IF_ERROR(spill.Append(static_cast<size_t>(p.key >> chunk_shift), p));
-      } else {
-        points.push_back(p);
+      for (size_t i = 0; i < n; ++i) {
+        const std::array<uint32_t, 3> cell = cell_of(batch.xyz[i]);
+        codes[i] = MortonEncode(cell[0], cell[1], cell[2]);
       }
+    }
+    const auto point = [&](size_t i) {
+      return KeyedPoint{codes[i], survey.has_color ? batch.rgb[i] : std::array<uint16_t, 3>{0, 0, 0}};
+    };
+    if (grid.chunk_levels > 0) {
+      for (size_t i = 0; i < n; ++i) RETURN_IF_ERROR(spill.Append(static_cast<size_t>(codes[i] >> chunk_shift), point(i)));
+    } else {
+      for (size_t i = 0; i < n; ++i) points.push_back(point(i));
     }
     read += n;
     if (options.progress) options.progress(read, survey.points);
