@@ -4,8 +4,10 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "pointdag/read/memory_reader.h"
+#include "pointdag/read/scan_reader.h"
 #include "pointdag/voxelize/morton.h"
 #include "pointdag/voxelize/point_spacing.h"
 #include "pointdag/voxelize/radix_sort.h"
@@ -212,6 +214,77 @@ TEST(RadixSort, SortsLikeStdSortWithDuplicatesAndEveryWidth) {
       });  // equal keys may come in any order: the same items?
       ASSERT_EQ(items, expected) << bits << " bits, " << n << " items";
     }
+  }
+}
+
+// The survey's bounds, points and color depth as a pass of Read's points gives them.
+void ExpectSurveyLikeReadPoints(const std::filesystem::path& path, size_t batch_points) {
+  auto reader = OpenScan(path);
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  const auto survey = SurveyScan(**reader, batch_points);
+  ASSERT_TRUE(survey.ok()) << survey.status().ToString();
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Bounds expected{{inf, inf, inf}, {-inf, -inf, -inf}};
+  uint64_t points = 0;
+  uint16_t max_color = 0;
+  PointBatch batch;
+  for (;;) {
+    const auto n = (*reader)->Read(batch, batch_points);
+    ASSERT_TRUE(n.ok());
+    if (*n == 0) break;
+    points += *n;
+    for (size_t i = 0; i < *n; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        expected.min[a] = std::min(expected.min[a], batch.xyz[i][a]);
+        expected.max[a] = std::max(expected.max[a], batch.xyz[i][a]);
+      }
+      if (!batch.rgb.empty()) max_color = std::max({max_color, batch.rgb[i][0], batch.rgb[i][1], batch.rgb[i][2]});
+    }
+  }
+  EXPECT_EQ(survey->points, points) << path;
+  EXPECT_EQ(survey->bounds.min, expected.min) << path;
+  EXPECT_EQ(survey->bounds.max, expected.max) << path;
+  EXPECT_EQ(survey->color_bits, max_color <= 255 ? 8 : (*reader)->info().stored_color_bits) << path;
+}
+
+// LAS and plain PLY readers take the survey's extremes from the stored values (LAS: the integers,
+// through a scale of either sign); the generic survey takes them from Read's points.
+TEST(SurveyScan, BoundsFromStoredValuesEqualThoseOfReadPoints) {
+  testing::ScratchDir dir;
+  auto points = testing::RandomLasPoints(1000, 11);
+  for (auto& p : points) p.rgb = {static_cast<uint16_t>(p.rgb[0] & 255), p.rgb[1], p.rgb[2]};
+  for (int format : {0, 3, 7}) {
+    for (double scale : {0.01, -0.003, 3.0}) {
+      testing::LasSpec spec;
+      spec.format = format;
+      spec.minor = format < 6 ? 2 : 4;
+      spec.scale = scale;
+      spec.offset = scale < 0 ? -2.5e5 : 123.25;
+      const auto path = dir / ("s" + std::to_string(format) + std::to_string(scale) + ".las");
+      testing::WriteBytes(path, testing::MakeLas(spec, points));
+      for (size_t batch : {size_t{7}, size_t{1} << 16}) ExpectSurveyLikeReadPoints(path, batch);
+    }
+  }
+  std::mt19937 rng(13);
+  for (const char* type : {"float", "double"}) {
+    std::string ply = std::string("ply\nformat binary_little_endian 1.0\nelement vertex 500\nproperty ") + type +
+                      " x\nproperty " + type + " y\nproperty " + type + " z\nproperty uchar red\n" +
+                      "property uchar green\nproperty uchar blue\nend_header\n";
+    for (int i = 0; i < 500; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        const double v = (static_cast<double>(rng() % 200001) - 100000.0) / 7.0;
+        if (type[0] == 'f') {
+          const float f = i == 3 && a == 0 ? -0.0f : static_cast<float>(v);
+          ply.append(reinterpret_cast<const char*>(&f), 4);
+        } else {
+          ply.append(reinterpret_cast<const char*>(&v), 8);
+        }
+      }
+      for (int c = 0; c < 3; ++c) ply.push_back(static_cast<char>(rng() % 200));
+    }
+    const auto path = dir / (std::string(type) + ".ply");
+    testing::WriteBytes(path, std::vector<uint8_t>(ply.begin(), ply.end()));
+    for (size_t batch : {size_t{7}, size_t{1} << 16}) ExpectSurveyLikeReadPoints(path, batch);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "pointdag/read/las_header.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -239,6 +240,46 @@ Status LasRecordLayout::Decode(const unsigned char* records, size_t n, uint64_t 
         c[ch] = LoadLE<uint16_t>(channels + 2 * ch);
         max = std::max(max, c[ch]);
       }
+    }
+    max_color_seen = max;
+  }
+  return Status::Ok();
+}
+
+Status LasRecordLayout::Widen(const unsigned char* records, size_t n, uint64_t first_index, Bounds& bounds,
+                              uint16_t& max_color_seen) const {
+  if (n == 0) return Status::Ok();
+  const size_t length = record_length;
+  std::array<int32_t, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+  const unsigned char* rec = records;
+  for (size_t i = 0; i < n; ++i, rec += length) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const int32_t v = LoadLE<int32_t>(rec + 4 * axis);
+      lo[axis] = std::min(lo[axis], v);
+      hi[axis] = std::max(hi[axis], v);
+    }
+  }
+  std::array<double, 3> low, high;
+  for (int axis = 0; axis < 3; ++axis) {
+    low[axis] = lo[axis] * scale[axis] + offset[axis];
+    high[axis] = hi[axis] * scale[axis] + offset[axis];
+    if (scale[axis] < 0) std::swap(low[axis], high[axis]);
+    if (!std::isfinite(low[axis]) || !std::isfinite(high[axis])) {
+      // Some point overflows: Decode names the first.
+      std::vector<std::array<double, 3>> xyz(n);
+      RETURN_IF_ERROR(Decode(records, n, first_index, xyz.data(), nullptr, max_color_seen));
+      return Internal("LAS bounds overflow but every point is finite");
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    bounds.min[axis] = std::min(bounds.min[axis], low[axis]);
+    bounds.max[axis] = std::max(bounds.max[axis], high[axis]);
+  }
+  if (rgb_offset != 0) {
+    uint16_t max = max_color_seen;
+    rec = records + rgb_offset;
+    for (size_t i = 0; i < n; ++i, rec += length) {
+      max = std::max({max, LoadLE<uint16_t>(rec), LoadLE<uint16_t>(rec + 2), LoadLE<uint16_t>(rec + 4)});
     }
     max_color_seen = max;
   }

@@ -48,6 +48,11 @@ struct LasRecordLayout {
   // The same into n points at xyz (and rgb unless null); a non-finite point may leave the rest unset.
   Status Decode(const unsigned char* records, size_t n, uint64_t first_index, std::array<double, 3>* xyz,
                 std::array<uint16_t, 3>* rgb, uint16_t& max_color_seen) const;
+  // Widens `bounds` by n records as Decode's points would (and max_color_seen), with its errors.
+  // x * scale + offset is monotonic in the stored integer x (scale and offset are finite, scale is
+  // not zero, and rounding is monotonic): the extremes are those of the two extreme integers.
+  Status Widen(const unsigned char* records, size_t n, uint64_t first_index, Bounds& bounds,
+               uint16_t& max_color_seen) const;
 };
 
 // Reads and checks the header of an open LAS/LAZ file of `file_size` bytes; fills `info`.

@@ -47,19 +47,33 @@ Status LasReader::Rewind() {
   return Status::Ok();
 }
 
-StatusOr<size_t> LasReader::Read(PointBatch& batch, size_t max_points) {
+StatusOr<size_t> LasReader::Fill(size_t max_points) {
   const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, header_.point_count - next_point_));
-  // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
-  batch.xyz.resize(n);
-  batch.rgb.resize(layout_.rgb_offset != 0 ? n : 0);
-  if (n == 0) return size_t{0};
   buffer_.resize(n * layout_.record_length);
-  if (std::fread(buffer_.data(), layout_.record_length, n, file_) != n) {
-    batch.clear();
+  if (n > 0 && std::fread(buffer_.data(), layout_.record_length, n, file_) != n) {
     return Truncated("LAS point data ends early, at point " + Num(next_point_) + " of " + Num(header_.point_count));
   }
-  RETURN_IF_ERROR(layout_.Decode(buffer_.data(), n, next_point_, batch.xyz.data(),
+  return n;
+}
+
+StatusOr<size_t> LasReader::Read(PointBatch& batch, size_t max_points) {
+  const StatusOr<size_t> n = Fill(max_points);
+  if (!n.ok()) {
+    batch.clear();
+    return n.status();
+  }
+  // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
+  batch.xyz.resize(*n);
+  batch.rgb.resize(layout_.rgb_offset != 0 ? *n : 0);
+  RETURN_IF_ERROR(layout_.Decode(buffer_.data(), *n, next_point_, batch.xyz.data(),
                                  layout_.rgb_offset != 0 ? batch.rgb.data() : nullptr, max_color_seen_));
+  next_point_ += *n;
+  return *n;
+}
+
+StatusOr<size_t> LasReader::ReadBounds(Bounds& bounds, size_t max_points, PointBatch&) {
+  ASSIGN_OR_RETURN(const size_t n, Fill(max_points));
+  RETURN_IF_ERROR(layout_.Widen(buffer_.data(), n, next_point_, bounds, max_color_seen_));
   next_point_ += n;
   return n;
 }

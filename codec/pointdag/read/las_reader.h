@@ -22,9 +22,12 @@ class LasReader final : public ScanReader {
 
   StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override;
   Status Rewind() override;
+  StatusOr<size_t> ReadBounds(Bounds& bounds, size_t max_points, PointBatch& scratch) override;
 
  private:
   LasReader() = default;
+  // The next up to max_points records into buffer_; how many.
+  StatusOr<size_t> Fill(size_t max_points);
 
   std::FILE* file_ = nullptr;
   std::string path_;

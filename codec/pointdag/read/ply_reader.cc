@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <string_view>
 
@@ -77,26 +78,31 @@ class PlainPlyReader final : public ScanReader {
   ~PlainPlyReader() override { std::fclose(file_); }
 
   StatusOr<size_t> Read(PointBatch& batch, size_t max_points) override {
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.point_count - next_));
-    // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
-    batch.xyz.resize(n);
-    batch.rgb.resize(info_.has_color ? n : 0);
-    buffer_.resize(n * layout_.record);
-    if (std::fread(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
+    const StatusOr<size_t> n = Fill(max_points);
+    if (!n.ok()) {
       batch.clear();
-      return Truncated("PLY data ends early, at point " + std::to_string(next_) + " of " + std::to_string(info_.point_count));
+      return n.status();
     }
-    const bool finite = layout_.xyz_double[0] && layout_.xyz_double[1] && layout_.xyz_double[2]
-                            ? DecodeXyz<double>(n, batch)
-                        : !layout_.xyz_double[0] && !layout_.xyz_double[1] && !layout_.xyz_double[2]
-                            ? DecodeXyz<float>(n, batch)
-                            : DecodeMixedXyz(n, batch);
-    if (!finite) {
-      size_t i = 0;
-      while (std::isfinite(batch.xyz[i][0]) && std::isfinite(batch.xyz[i][1]) && std::isfinite(batch.xyz[i][2])) ++i;
-      return Malformed("point " + std::to_string(next_ + i) + " has a coordinate that is not finite");
+    RETURN_IF_ERROR(Decode(*n, batch));
+    next_ += *n;
+    return *n;
+  }
+
+  StatusOr<size_t> ReadBounds(Bounds& bounds, size_t max_points, PointBatch& scratch) override {
+    const bool doubles = layout_.xyz_double[0] && layout_.xyz_double[1] && layout_.xyz_double[2];
+    const bool floats = !layout_.xyz_double[0] && !layout_.xyz_double[1] && !layout_.xyz_double[2];
+    if (!doubles && !floats) return ScanReader::ReadBounds(bounds, max_points, scratch);
+    ASSIGN_OR_RETURN(const size_t n, Fill(max_points));
+    if (!(doubles ? WidenBounds<double>(n, bounds) : WidenBounds<float>(n, bounds))) {
+      return Decode(n, scratch);  // Decode names the first point that is not finite
     }
-    if (info_.has_color) DecodeRgb(n, batch);
+    if (info_.has_color) {
+      const size_t record = layout_.record, r = *layout_.rgb[0], g = *layout_.rgb[1], b = *layout_.rgb[2];
+      const unsigned char* at = buffer_.data();
+      unsigned char max = 0;
+      for (size_t i = 0; i < n; ++i, at += record) max = std::max({max, at[r], at[g], at[b]});
+      max_color_seen_ = std::max<uint16_t>(max_color_seen_, max);
+    }
     next_ += n;
     return n;
   }
@@ -113,6 +119,63 @@ class PlainPlyReader final : public ScanReader {
   Layout layout_;
   uint64_t next_ = 0;
   std::vector<unsigned char> buffer_;
+
+  // The next up to max_points records into buffer_; how many.
+  StatusOr<size_t> Fill(size_t max_points) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(max_points, info_.point_count - next_));
+    buffer_.resize(n * layout_.record);
+    if (std::fread(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
+      return Truncated("PLY data ends early, at point " + std::to_string(next_) + " of " + std::to_string(info_.point_count));
+    }
+    return n;
+  }
+
+  // buffer_'s n records as points; Malformed naming the first point that is not finite.
+  Status Decode(size_t n, PointBatch& batch) {
+    // Resized, not cleared: a batch of the last call's size is overwritten without being zero-filled first.
+    batch.xyz.resize(n);
+    batch.rgb.resize(info_.has_color ? n : 0);
+    const bool finite = layout_.xyz_double[0] && layout_.xyz_double[1] && layout_.xyz_double[2]
+                            ? DecodeXyz<double>(n, batch)
+                        : !layout_.xyz_double[0] && !layout_.xyz_double[1] && !layout_.xyz_double[2]
+                            ? DecodeXyz<float>(n, batch)
+                            : DecodeMixedXyz(n, batch);
+    if (!finite) {
+      size_t i = 0;
+      while (std::isfinite(batch.xyz[i][0]) && std::isfinite(batch.xyz[i][1]) && std::isfinite(batch.xyz[i][2])) ++i;
+      return Malformed("point " + std::to_string(next_ + i) + " has a coordinate that is not finite");
+    }
+    if (info_.has_color) DecodeRgb(n, batch);
+    return Status::Ok();
+  }
+
+  // Widens bounds by buffer_'s n records, all of one coordinate type: the extremes in that type
+  // (its conversion to double is exact and keeps order), with ties kept first-seen as the double
+  // comparisons on points do. False if a coordinate is not finite.
+  template <class Coord>
+  bool WidenBounds(size_t n, Bounds& bounds) const {
+    const size_t record = layout_.record;
+    const size_t offsets[3] = {layout_.xyz[0], layout_.xyz[1], layout_.xyz[2]};
+    constexpr Coord inf = std::numeric_limits<Coord>::infinity();
+    Coord lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+    bool finite = true;
+    const unsigned char* at = buffer_.data();
+    for (size_t i = 0; i < n; ++i, at += record) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const Coord v = LoadLE<Coord>(at + offsets[axis]);
+        finite &= std::isfinite(v);
+        lo[axis] = std::min(lo[axis], v);
+        hi[axis] = std::max(hi[axis], v);
+      }
+    }
+    if (!finite) return false;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (n == 0) break;
+      bounds.min[axis] = std::min(bounds.min[axis], static_cast<double>(lo[axis]));
+      bounds.max[axis] = std::max(bounds.max[axis], static_cast<double>(hi[axis]));
+    }
+    return true;
+  }
 
   // The loops below keep the layout in locals: stores to the batch cannot change them, so they stay
   // in registers. Each returns whether every coordinate is finite.

@@ -40,14 +40,8 @@ StatusOr<ScanSurvey> SurveyScan(ScanReader& reader, size_t batch_points) {
   RETURN_IF_ERROR(reader.Rewind());
   PointBatch batch;
   for (;;) {
-    ASSIGN_OR_RETURN(size_t n, reader.Read(batch, batch_points));
+    ASSIGN_OR_RETURN(size_t n, reader.ReadBounds(survey.bounds, batch_points, batch));
     if (n == 0) break;
-    for (const auto& p : batch.xyz) {
-      for (int axis = 0; axis < 3; ++axis) {
-        survey.bounds.min[axis] = std::min(survey.bounds.min[axis], p[axis]);
-        survey.bounds.max[axis] = std::max(survey.bounds.max[axis], p[axis]);
-      }
-    }
     survey.points += n;
   }
   if (survey.points == 0) return Malformed("the scan holds zero points");

@@ -8,6 +8,7 @@
 // 16-bit color. A point with a NaN or infinite coordinate is an error, not a silent skip.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -85,6 +86,20 @@ class ScanReader {
   virtual StatusOr<size_t> Read(PointBatch& batch, size_t max_points) = 0;
   // Starts over from the first point (readers are read twice: once for bounds, once to voxelize).
   virtual Status Rewind() = 0;
+  // The survey pass's read: up to max_points next points widen `bounds` (and max_color_seen) as
+  // Read's points would, with Read's errors. This default reads them into `scratch`; readers that
+  // can take the extremes from their stored values, without making points, override it. (Inline:
+  // ScanReader has no out-of-line virtual, so the PCL reader's library needs no scan_reader.cc.)
+  virtual StatusOr<size_t> ReadBounds(Bounds& bounds, size_t max_points, PointBatch& scratch) {
+    ASSIGN_OR_RETURN(const size_t n, Read(scratch, max_points));
+    for (const auto& p : scratch.xyz) {
+      for (int axis = 0; axis < 3; ++axis) {
+        bounds.min[axis] = std::min(bounds.min[axis], p[axis]);
+        bounds.max[axis] = std::max(bounds.max[axis], p[axis]);
+      }
+    }
+    return n;
+  }
 
  protected:
   ScanInfo info_;
