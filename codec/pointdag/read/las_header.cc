@@ -219,14 +219,15 @@ Status LasRecordLayout::Decode(const unsigned char* records, size_t n, uint64_t 
   // in registers (a uint16_t reference could alias an rgb channel and was reloaded every point).
   const std::array<double, 3> s = scale, o = offset;
   const size_t length = record_length;
-  bool finite = true;
-  for (size_t i = 0; i < n; ++i) {
-    const unsigned char* rec = records + i * length;
-    auto& p = xyz[i];
-    for (int axis = 0; axis < 3; ++axis) p[axis] = LoadLE<int32_t>(rec + 4 * axis) * s[axis] + o[axis];
-    finite &= std::isfinite(p[0]) & std::isfinite(p[1]) & std::isfinite(p[2]);
+  double nx = 0, ny = 0, nz = 0;  // sums of v * 0: ±0 while every v is finite, NaN after any other
+  const unsigned char* rec = records;
+  for (size_t i = 0; i < n; ++i, rec += length) {
+    const double x = LoadLE<int32_t>(rec) * s[0] + o[0], y = LoadLE<int32_t>(rec + 4) * s[1] + o[1],
+                 z = LoadLE<int32_t>(rec + 8) * s[2] + o[2];
+    nx += x * 0.0, ny += y * 0.0, nz += z * 0.0;
+    xyz[i] = {x, y, z};
   }
-  if (!finite) {
+  if (!(nx + ny + nz == 0)) {
     size_t i = 0;
     while (std::isfinite(xyz[i][0]) && std::isfinite(xyz[i][1]) && std::isfinite(xyz[i][2])) ++i;
     return Malformed("point " + Num(first_index + i) + " has a coordinate that is not finite");
@@ -250,15 +251,14 @@ Status LasRecordLayout::Widen(const unsigned char* records, size_t n, uint64_t f
                               uint16_t& max_color_seen) const {
   if (n == 0) return Status::Ok();
   const size_t length = record_length;
-  std::array<int32_t, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+  int32_t lx = INT32_MAX, ly = INT32_MAX, lz = INT32_MAX, hx = INT32_MIN, hy = INT32_MIN, hz = INT32_MIN;
   const unsigned char* rec = records;
   for (size_t i = 0; i < n; ++i, rec += length) {
-    for (int axis = 0; axis < 3; ++axis) {
-      const int32_t v = LoadLE<int32_t>(rec + 4 * axis);
-      lo[axis] = std::min(lo[axis], v);
-      hi[axis] = std::max(hi[axis], v);
-    }
+    const int32_t x = LoadLE<int32_t>(rec), y = LoadLE<int32_t>(rec + 4), z = LoadLE<int32_t>(rec + 8);
+    lx = std::min(lx, x), ly = std::min(ly, y), lz = std::min(lz, z);
+    hx = std::max(hx, x), hy = std::max(hy, y), hz = std::max(hz, z);
   }
+  const int32_t lo[3] = {lx, ly, lz}, hi[3] = {hx, hy, hz};
   std::array<double, 3> low, high;
   for (int axis = 0; axis < 3; ++axis) {
     low[axis] = lo[axis] * scale[axis] + offset[axis];

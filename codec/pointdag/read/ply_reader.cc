@@ -1,6 +1,7 @@
 #include "pointdag/read/ply_reader.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -154,42 +155,43 @@ class PlainPlyReader final : public ScanReader {
   // comparisons on points do. False if a coordinate is not finite.
   template <class Coord>
   bool WidenBounds(size_t n, Bounds& bounds) const {
-    const size_t record = layout_.record;
-    const size_t offsets[3] = {layout_.xyz[0], layout_.xyz[1], layout_.xyz[2]};
+    if (n == 0) return true;
+    const size_t record = layout_.record, ox = layout_.xyz[0], oy = layout_.xyz[1], oz = layout_.xyz[2];
     constexpr Coord inf = std::numeric_limits<Coord>::infinity();
-    Coord lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
-    bool finite = true;
+    Coord lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
+    Coord nx = 0, ny = 0, nz = 0;  // sums of v * 0, as below
     const unsigned char* at = buffer_.data();
     for (size_t i = 0; i < n; ++i, at += record) {
-      for (int axis = 0; axis < 3; ++axis) {
-        const Coord v = LoadLE<Coord>(at + offsets[axis]);
-        finite &= std::isfinite(v);
-        lo[axis] = std::min(lo[axis], v);
-        hi[axis] = std::max(hi[axis], v);
-      }
+      const Coord x = LoadLE<Coord>(at + ox), y = LoadLE<Coord>(at + oy), z = LoadLE<Coord>(at + oz);
+      lx = std::min(lx, x), ly = std::min(ly, y), lz = std::min(lz, z);
+      hx = std::max(hx, x), hy = std::max(hy, y), hz = std::max(hz, z);
+      nx += x * Coord{0}, ny += y * Coord{0}, nz += z * Coord{0};
     }
-    if (!finite) return false;
+    if (!(nx + ny + nz == 0)) return false;
+    const double lo[3] = {lx, ly, lz}, hi[3] = {hx, hy, hz};
     for (int axis = 0; axis < 3; ++axis) {
-      if (n == 0) break;
-      bounds.min[axis] = std::min(bounds.min[axis], static_cast<double>(lo[axis]));
-      bounds.max[axis] = std::max(bounds.max[axis], static_cast<double>(hi[axis]));
+      bounds.min[axis] = std::min(bounds.min[axis], lo[axis]);
+      bounds.max[axis] = std::max(bounds.max[axis], hi[axis]);
     }
     return true;
   }
 
   // The loops below keep the layout in locals: stores to the batch cannot change them, so they stay
-  // in registers. Each returns whether every coordinate is finite.
+  // in registers. Each returns whether every coordinate is finite, the fixed-type ones from sums of
+  // v * 0: ±0 for a finite v, NaN for an infinite or NaN one, which the sum keeps; one test a batch
+  // instead of a test per value.
   template <class Coord>
   bool DecodeXyz(size_t n, PointBatch& batch) const {
     const size_t record = layout_.record, x = layout_.xyz[0], y = layout_.xyz[1], z = layout_.xyz[2];
     const unsigned char* at = buffer_.data();
-    bool finite = true;
+    std::array<double, 3>* out = batch.xyz.data();
+    Coord nx = 0, ny = 0, nz = 0;
     for (size_t i = 0; i < n; ++i, at += record) {
-      const Coord v[3] = {LoadLE<Coord>(at + x), LoadLE<Coord>(at + y), LoadLE<Coord>(at + z)};
-      finite &= std::isfinite(v[0]) & std::isfinite(v[1]) & std::isfinite(v[2]);
-      batch.xyz[i] = {v[0], v[1], v[2]};
+      const Coord vx = LoadLE<Coord>(at + x), vy = LoadLE<Coord>(at + y), vz = LoadLE<Coord>(at + z);
+      nx += vx * Coord{0}, ny += vy * Coord{0}, nz += vz * Coord{0};
+      out[i] = {vx, vy, vz};
     }
-    return finite;
+    return nx + ny + nz == 0;
   }
 
   bool DecodeMixedXyz(size_t n, PointBatch& batch) const {
