@@ -283,8 +283,8 @@ int Main(int argc, char** argv) {
   auto* lossless = encode->add_flag("--lossless", color_choice.lossless, "keep colors exact (the default)");
   quality->excludes(lossless);
   encode->add_option("--color-codec", color_choice.codec,
-                     "raw, lossless, fixed3, vbr, png, jpeg, webp or astc (the lossy ones default to 38 dB)")
-      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr", "png", "jpeg", "webp", "astc"}));
+                     "raw, lossless, fixed3, vbr, png, jpeg, webp, astc or hierarchical (the lossy ones default to 38 dB)")
+      ->check(CLI::IsMember({"raw", "lossless", "fixed3", "vbr", "png", "jpeg", "webp", "astc", "hierarchical"}));
   encode->add_option("--curve", color_choice.curve, "2D mapping of png/jpeg/webp/astc colors")
       ->check(CLI::IsMember({"hilbert", "morton"}));
 

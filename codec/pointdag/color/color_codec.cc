@@ -7,6 +7,7 @@
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/block_target.h"
+#include "pointdag/color/hierarchical_colors.h"
 #include "pointdag/color/lossless_context.h"
 
 namespace pointdag {
@@ -124,11 +125,36 @@ StatusOr<EncodedColors> SearchAstcFootprint(std::span<const Rgb8> colors, std::s
   return InvalidArgument("astc cannot reach " + std::to_string(*options.target_psnr_y) + " dB PSNR-Y on these colors");
 }
 
+// Leaf mode only: the codec's octree is the voxels' (morton), one color each.
+StatusOr<EncodedColors> EncodeHierarchicalAt(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                             std::span<const uint64_t> judged, const ColorEncodeOptions& options) {
+  if (!judged.empty() || morton.size() != colors.size()) {
+    return InvalidArgument("hierarchical colors code one color per voxel (leaf mode), with the voxels' Morton codes");
+  }
+  HierarchicalColors coded;
+  if (options.target_psnr_y) {
+    ASSIGN_OR_RETURN(coded, EncodeHierarchicalColorsForTarget(colors, morton, *options.target_psnr_y));
+  } else {
+    // Without a target, max_mse sets the step as a uniform quantizer's error: MSE = step² / 12.
+    const double step16 = 16 * std::sqrt(12 * std::max(options.max_mse, 1e-3));
+    const auto to16 = [](double v) { return static_cast<uint16_t>(std::clamp(std::lround(v), 1L, 65535L)); };
+    ASSIGN_OR_RETURN(coded, EncodeHierarchicalColors(colors, morton, {to16(step16), to16(1.5 * step16)}));
+  }
+  EncodedColors out;
+  out.codec = ColorCodec::kHierarchical;
+  out.psnr = MeasureColorPsnr(colors, coded.decoded);
+  out.max_mse = coded.steps.luma / 16.0;
+  out.encodes = 1;
+  out.bytes.push_back(static_cast<uint8_t>(ColorCodec::kHierarchical));
+  out.bytes.insert(out.bytes.end(), coded.payload.begin(), coded.payload.end());
+  return out;
+}
+
 }  // namespace
 
 bool IsLossy(ColorCodec codec) {
   return codec == ColorCodec::kFixedRate || codec == ColorCodec::kVariableRate || codec == ColorCodec::kJpeg ||
-         codec == ColorCodec::kWebp || codec == ColorCodec::kAstc;
+         codec == ColorCodec::kWebp || codec == ColorCodec::kAstc || codec == ColorCodec::kHierarchical;
 }
 
 const char* ColorCodecName(ColorCodec codec) {
@@ -141,16 +167,18 @@ const char* ColorCodecName(ColorCodec codec) {
     case ColorCodec::kJpeg: return "jpeg";
     case ColorCodec::kWebp: return "webp";
     case ColorCodec::kAstc: return "astc";
+    case ColorCodec::kHierarchical: return "hierarchical";
   }
   return "?";
 }
 
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name) {
   for (ColorCodec c : {ColorCodec::kRaw, ColorCodec::kLossless, ColorCodec::kFixedRate, ColorCodec::kVariableRate,
-                       ColorCodec::kPng, ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc}) {
+                       ColorCodec::kPng, ColorCodec::kJpeg, ColorCodec::kWebp, ColorCodec::kAstc,
+                       ColorCodec::kHierarchical}) {
     if (name == ColorCodecName(c)) return c;
   }
-  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp, astc)");
+  return InvalidArgument("unknown color codec '" + name + "' (raw, lossless, fixed3, vbr, png, jpeg, webp, astc, hierarchical)");
 }
 
 StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEncodeOptions& options,
@@ -160,8 +188,9 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
     if (i >= colors.size()) return InvalidArgument("a judged color index is out of range");
   }
   if (!IsLossy(options.codec) && options.target_psnr_y) {
-    return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg, webp or astc)");
+    return InvalidArgument("a PSNR target needs a lossy codec (vbr, fixed3, jpeg, webp, astc or hierarchical)");
   }
+  if (options.codec == ColorCodec::kHierarchical) return EncodeHierarchicalAt(colors, morton, judged, options);
   if (options.codec == ColorCodec::kPng) return EncodeImageAt(colors, judged, options.codec, options.curve, 0);
   if (options.codec == ColorCodec::kAstc) {
     if (!options.target_psnr_y) return EncodeAstcAt(colors, judged, options.curve, options.astc_footprint);

@@ -22,7 +22,8 @@
 
 namespace pointdag {
 
-enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3, kPng = 4, kJpeg = 5, kWebp = 6, kAstc = 7 };
+enum class ColorCodec : uint8_t { kRaw = 0, kLossless = 1, kFixedRate = 2, kVariableRate = 3, kPng = 4, kJpeg = 5, kWebp = 6, kAstc = 7,
+                               kHierarchical = 8 };
 const char* ColorCodecName(ColorCodec codec);
 StatusOr<ColorCodec> ParseColorCodec(const std::string& name);
 

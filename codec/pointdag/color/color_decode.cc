@@ -5,6 +5,7 @@
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
 #include "pointdag/color/color_codec.h"
+#include "pointdag/color/hierarchical_colors.h"
 #include "pointdag/color/lossless_context.h"
 #include "pointdag/entropy/zstd_stream.h"
 
@@ -59,6 +60,8 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
       return DecodeColorImage(payload, count);
     case ColorCodec::kAstc:
       return DecodeColorAstc(payload, count);
+    case ColorCodec::kHierarchical:
+      return DecodeHierarchicalColors(payload, count, morton);
   }
   return Corrupt("colors section names unknown codec " + std::to_string(section[0]));
 }

@@ -1,0 +1,434 @@
+#include "pointdag/color/hierarchical_colors.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <type_traits>
+
+#include "pointdag/color/hierarchical_octree.h"
+#include "pointdag/entropy/adaptive_codes.h"
+#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/varint.h"
+
+namespace pointdag {
+namespace {
+
+using hierarchical::Butterfly;
+using hierarchical::DivRound;
+using hierarchical::Octree;
+using hierarchical::OctreeLevel;
+using hierarchical::Ycc;
+
+constexpr uint32_t kMaxMagnitude = uint32_t{1} << 24;
+constexpr double kRounding = 0.45;      // quantizer offset below 0.5: a dead zone around 0
+constexpr double kRdoLambda = 0.1;      // λ of the ±1 → 0 decision, in squared steps per bit
+constexpr double kChromaStepRatio = 1.5;
+
+// A node's 18 face and edge neighbours, as steps of −1/0/+1 along Morton bit positions 0, 1, 2.
+struct Offset {
+  std::array<int8_t, 3> d;
+  int nonzero;
+};
+constexpr int OffsetIndex(int d0, int d1, int d2) { return (d0 + 1) + 3 * (d1 + 1) + 9 * (d2 + 1); }
+constexpr auto kOffsets = [] {
+  std::array<Offset, 18> t{};
+  int n = 0;
+  for (int d2 = -1; d2 <= 1; ++d2) {
+    for (int d1 = -1; d1 <= 1; ++d1) {
+      for (int d0 = -1; d0 <= 1; ++d0) {
+        const int nonzero = (d0 != 0) + (d1 != 0) + (d2 != 0);
+        if (nonzero == 1 || nonzero == 2) {
+          t[n++] = {{static_cast<int8_t>(d0), static_cast<int8_t>(d1), static_cast<int8_t>(d2)}, nonzero};
+        }
+      }
+    }
+  }
+  return t;
+}();
+
+// Prediction weights: the parent 8; the parent's face (2) and edge (1) neighbours on the child's
+// side; the child's own face (2) and edge (1) neighbours already decoded (in earlier parents).
+constexpr int64_t kParentWeight = 8;
+
+struct Models {
+  // zero flag: channel, activity, height (0..3), parent's nonzero count (0..2), local count (0..2)
+  YoungBitModel zero[3][9][4][3][3];
+  YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
+  GammaModel magnitude[3][4];          // channel, height / 3
+  BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
+};
+
+// Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
+struct ChromaFit {
+  int64_t sxy = 0, sxx = 0;
+  int64_t Alpha() const { return sxx == 0 ? 0 : std::clamp<int64_t>(DivRound(sxy * 4096, sxx), -8192, 8192); }
+  void Add(int32_t luma_value, int64_t chroma_difference, int64_t luma_step) {
+    const int64_t y = std::clamp<int64_t>(luma_value, -1024, 1024);
+    const int64_t c = std::clamp<int64_t>(DivRound(chroma_difference * 256, luma_step), -(1 << 20), 1 << 20);
+    sxy += y * c;
+    sxx += y * y * 256;
+    while (sxx > (int64_t{1} << 40) || std::abs(sxy) > (int64_t{1} << 40)) sxy >>= 1, sxx >>= 1;
+  }
+};
+
+// How large a difference the neighbourhood's spread suggests, in steps: log2 buckets 0..8.
+int Activity(int64_t spread, int64_t step) {
+  const int64_t e = (spread << 8) / step;
+  return e == 0 ? 0 : std::clamp(static_cast<int>(std::bit_width(static_cast<uint64_t>(e))) - 5, 0, 8);
+}
+
+struct Header {
+  uint64_t count = 0;
+  HierarchicalSteps steps;
+  Ycc root{};
+};
+
+// The encoder's side of the shared walk: the true colors' sums per node, and the quantizer.
+class EncoderSide {
+ public:
+  static constexpr bool kEncode = true;
+  std::vector<std::vector<std::array<double, 3>>> sums;  // per level and node: Σ YCbCr (1/64) of its voxels
+  BinaryRangeEncoder rc;
+
+  template <typename Model>
+  int Bit(Model& m, int bit) {
+    rc.Encode(m, bit);
+    return bit;
+  }
+  uint32_t Gamma(GammaModel& m, uint32_t v) {
+    EncodeGamma(rc, m, v);
+    return v;
+  }
+  // Dead-zone quantization, then ±1 → 0 where the bits saved outweigh the error added.
+  static int32_t Quantize(double residual, int64_t step, const YoungBitModel& zero, const YoungBitModel& greater_one) {
+    const double u = std::fabs(residual) / static_cast<double>(step);
+    int32_t m = static_cast<int32_t>(std::min(std::floor(u + kRounding), static_cast<double>(kMaxMagnitude)));
+    if (m == 1) {
+      const double p_nonzero = zero.P0() / 4096.0, p_one = greater_one.P0() / 4096.0;
+      const double bits_zero = -std::log2(1 - p_nonzero);
+      const double bits_one = -std::log2(p_nonzero) - std::log2(p_one) + 1;
+      if (u * u + kRdoLambda * bits_zero < (u - 1) * (u - 1) + kRdoLambda * bits_one) m = 0;
+    }
+    return residual < 0 ? -m : m;
+  }
+};
+
+class DecoderSide {
+ public:
+  static constexpr bool kEncode = false;
+  explicit DecoderSide(std::span<const uint8_t> in) : rc(in) {}
+  BinaryRangeDecoder rc;
+
+  template <typename Model>
+  int Bit(Model& m, int) {
+    return rc.Decode(m);
+  }
+  uint32_t Gamma(GammaModel& m, uint32_t) { return DecodeGamma(rc, m); }
+};
+
+// Codes (EncoderSide) or decodes (DecoderSide) every level's differences, top down, nodes in Morton
+// order, a node's butterflies coarsest first, each Y, Cb, Cr; -> the voxels' reconstructed means.
+template <typename Side>
+StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, Side& side) {
+  auto models = std::make_unique<Models>();
+  std::vector<Ycc> rec = {header.root}, child_rec;
+  std::vector<uint8_t> nz = {0}, child_nz;  // per node: its parent's nonzero values per channel, 2 bits each, capped at 2
+  std::array<ChromaFit, 3> fit;
+  for (int l = 0; l < tree.depth; ++l) {
+    const OctreeLevel& nodes = tree.level[l];
+    const OctreeLevel& children = tree.level[l + 1];
+    const int height = tree.depth - 1 - l;
+    const int64_t luma_step = hierarchical::LevelStep(header.steps.luma, height);
+    const int64_t chroma_step = hierarchical::LevelStep(header.steps.chroma, height);
+    const int hctx = std::min(height, 3), mctx = std::min(height / 3, 3);
+    child_rec.assign(children.code.size(), Ycc{});
+    child_nz.assign(children.code.size(), 0);
+    const hierarchical::LevelIndex index(nodes.code);
+    for (size_t i = 0; i < nodes.code.size(); ++i) {
+      const uint32_t first = nodes.first_child[i], end = nodes.first_child[i + 1];
+      if (end - first == 1) {  // a lone child: the parent's mean, nothing coded
+        child_rec[first] = rec[i];
+        continue;
+      }
+      std::array<int64_t, 27> neighbour;
+      neighbour.fill(-1);
+      for (const Offset& o : kOffsets) {
+        uint64_t cell = nodes.code[i];
+        bool inside = true;
+        for (int a = 0; a < 3 && inside; ++a) {
+          if (o.d[a] != 0) inside = hierarchical::StepCell(cell, a, o.d[a], l, cell);
+        }
+        if (inside) neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])] = index.Find(cell);
+      }
+      std::array<int64_t, 3> lo, hi;
+      for (int c = 0; c < 3; ++c) lo[c] = hi[c] = rec[i][c];
+      const auto seen = [&](const Ycc& v) {
+        for (int c = 0; c < 3; ++c) lo[c] = std::min<int64_t>(lo[c], v[c]), hi[c] = std::max<int64_t>(hi[c], v[c]);
+      };
+      std::array<uint32_t, 8> weight{};
+      std::array<std::array<int64_t, 3>, 8> prediction{};
+      for (uint32_t j = first; j < end; ++j) weight[children.code[j] & 7] = children.weight[j];
+      for (uint32_t j = first; j < end; ++j) {
+        const int slot = static_cast<int>(children.code[j] & 7);
+        const std::array<int, 3> side_of = {(slot & 1) ? 1 : -1, (slot & 2) ? 1 : -1, (slot & 4) ? 1 : -1};
+        std::array<int64_t, 3> acc;
+        for (int c = 0; c < 3; ++c) acc[c] = kParentWeight * rec[i][c];
+        int64_t total = kParentWeight;
+        const auto add = [&](const Ycc& v, int64_t w) {
+          for (int c = 0; c < 3; ++c) acc[c] += w * v[c];
+          total += w;
+          seen(v);
+        };
+        for (const Offset& o : kOffsets) {  // the parent's neighbours on the child's side
+          bool toward = true;
+          for (int a = 0; a < 3; ++a) toward = toward && (o.d[a] == 0 || o.d[a] == side_of[a]);
+          if (!toward) continue;
+          const int64_t n = neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])];
+          if (n >= 0) add(rec[n], o.nonzero == 1 ? 2 : 1);
+        }
+        for (const Offset& o : kOffsets) {  // the child's neighbours, where their parents came first
+          std::array<int, 3> t, up;
+          for (int a = 0; a < 3; ++a) {
+            t[a] = ((slot >> a) & 1) + o.d[a];
+            up[a] = t[a] < 0 ? -1 : (t[a] > 1 ? 1 : 0);
+          }
+          if (up[0] == 0 && up[1] == 0 && up[2] == 0) continue;  // a sibling: decoded with this child
+          const int64_t n = neighbour[OffsetIndex(up[0], up[1], up[2])];
+          if (n < 0 || n >= static_cast<int64_t>(i)) continue;
+          const int s = (t[0] & 1) | (t[1] & 1) << 1 | (t[2] & 1) << 2;
+          const uint8_t mask = nodes.child_mask[n];
+          if (!((mask >> s) & 1)) continue;
+          add(child_rec[nodes.first_child[n] + std::popcount(static_cast<unsigned>(mask & ((1u << s) - 1)))],
+              o.nonzero == 1 ? 2 : 1);
+        }
+        for (int c = 0; c < 3; ++c) prediction[slot][c] = DivRound(acc[c], total);
+      }
+      const hierarchical::NodePlan plan = hierarchical::PlanNode(nodes.child_mask[i], weight);
+      std::array<int64_t, 8> weights64;
+      for (int s = 0; s < 8; ++s) weights64[s] = weight[s];
+      std::array<std::array<int64_t, 7>, 3> predicted{}, decoded{};
+      std::array<std::array<double, 7>, 3> truth{};
+      for (int c = 0; c < 3; ++c) {
+        std::array<int64_t, 8> sums{};
+        for (int s = 0; s < 8; ++s) sums[s] = weights64[s] * prediction[s][c];
+        hierarchical::ForwardDifferences(plan, sums, weights64, predicted[c], DivRound);
+        if constexpr (Side::kEncode) {
+          std::array<double, 8> true_sums{}, true_weights{};
+          for (uint32_t j = first; j < end; ++j) {
+            true_sums[children.code[j] & 7] = side.sums[l + 1][j][c];
+            true_weights[children.code[j] & 7] = children.weight[j];
+          }
+          hierarchical::ForwardDifferences(plan, true_sums, true_weights, truth[c],
+                                           [](double sum, double w) { return sum / w; });
+        }
+      }
+      std::array<std::array<int64_t, 2>, 7> step;  // per butterfly: luma's, chroma's
+      for (int k = 0; k < plan.count; ++k) {
+        const Butterfly& bf = plan.butterfly[k];
+        step[k] = {hierarchical::DifferenceStep(luma_step, bf.wa, bf.wb),
+                   hierarchical::DifferenceStep(chroma_step, bf.wa, bf.wb)};
+      }
+      std::array<std::array<int32_t, 7>, 3> value{};
+      std::array<int, 3> local = {0, 0, 0};
+      for (int k = plan.count - 1; k >= 0; --k) {
+        for (int c = 0; c < 3; ++c) {
+          const int64_t st = step[k][c == 0 ? 0 : 1];
+          const int parent_nz = (nz[i] >> (2 * c)) & 3;
+          const int luma_nz = value[0][k] != 0;
+          const int local_ctx = c == 0 ? std::min(local[0], 2) : (c == 1 ? luma_nz : std::min(luma_nz + 2 * (value[1][k] != 0), 2));
+          const int64_t from_luma = c > 0 ? DivRound(fit[c].Alpha() * value[0][k] * step[k][0], 4096) : 0;
+          const int act = Activity(hi[c] - lo[c], st);
+          YoungBitModel& zero = models->zero[c][act][hctx][parent_nz][local_ctx];
+          YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
+          int32_t v = 0;
+          if constexpr (Side::kEncode) {
+            v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero, greater_one);
+          }
+          if (!side.Bit(zero, v == 0)) {
+            uint32_t magnitude = 1;
+            if (side.Bit(greater_one, std::abs(v) > 1)) {
+              magnitude = 1 + side.Gamma(models->magnitude[c][mctx], static_cast<uint32_t>(std::abs(v) - 1));
+              if (magnitude > kMaxMagnitude || magnitude < 2) return Corrupt("hierarchical colors: a coefficient is out of range");
+            }
+            const int64_t p = predicted[c][k];
+            const int predicted_sign = 4 * std::abs(p) < st ? 0 : (p > 0 ? 1 : 2);
+            const int luma_sign = c == 0 ? 0 : (value[0][k] > 0 ? 1 : (value[0][k] < 0 ? 2 : 0));
+            const bool negative = side.Bit(models->sign[c][predicted_sign][luma_sign], v < 0);
+            v = negative ? -static_cast<int32_t>(magnitude) : static_cast<int32_t>(magnitude);
+          } else {
+            v = 0;
+          }
+          value[c][k] = v;
+          local[c] += v != 0;
+          const int64_t coded = from_luma + int64_t{v} * st;
+          decoded[c][k] = std::clamp(predicted[c][k] + coded, -hierarchical::kDifferenceLimit, hierarchical::kDifferenceLimit);
+          if (c > 0 && value[0][k] != 0) fit[c].Add(value[0][k], coded, step[k][0]);
+        }
+      }
+      const uint8_t packed = static_cast<uint8_t>(std::min(local[0], 2) | std::min(local[1], 2) << 2 | std::min(local[2], 2) << 4);
+      for (int c = 0; c < 3; ++c) {
+        std::array<int64_t, 8> means{};
+        hierarchical::InverseMeans(plan, rec[i][c], std::span<const int64_t>(decoded[c].data(), plan.count), means);
+        for (uint32_t j = first; j < end; ++j) child_rec[j][c] = static_cast<int32_t>(means[children.code[j] & 7]);
+      }
+      for (uint32_t j = first; j < end; ++j) child_nz[j] = packed;
+    }
+    rec.swap(child_rec);
+    nz.swap(child_nz);
+  }
+  return rec;
+}
+
+void PutU16(std::vector<uint8_t>& out, uint16_t v) { out.insert(out.end(), {static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8)}); }
+
+std::vector<Rgb8> ToRgb(const std::vector<Ycc>& voxels) {
+  std::vector<Rgb8> out(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) out[i] = hierarchical::YccToRgb(voxels[i]);
+  return out;
+}
+
+// The octree and the true colors' sums, built once for every encode of a search.
+class HierarchicalEncoder {
+ public:
+  static StatusOr<HierarchicalEncoder> Create(std::span<const Rgb8> colors, std::span<const uint64_t> morton) {
+    if (colors.size() != morton.size()) return InvalidArgument("hierarchical colors need one Morton code per color (leaf mode)");
+    HierarchicalEncoder e;
+    ASSIGN_OR_RETURN(e.tree_, hierarchical::BuildOctree(morton));
+    e.colors_ = colors;
+    auto& sums = e.sums_;
+    sums.resize(e.tree_.depth + 1);
+    sums[e.tree_.depth].resize(colors.size());
+    for (size_t i = 0; i < colors.size(); ++i) sums[e.tree_.depth][i] = hierarchical::RgbToYcc(colors[i]);
+    for (int l = e.tree_.depth - 1; l >= 0; --l) {
+      const OctreeLevel& level = e.tree_.level[l];
+      sums[l].assign(level.code.size(), {0, 0, 0});
+      for (size_t i = 0; i < level.code.size(); ++i) {
+        for (uint32_t j = level.first_child[i]; j < level.first_child[i + 1]; ++j) {
+          for (int c = 0; c < 3; ++c) sums[l][i][c] += sums[l + 1][j][c];
+        }
+      }
+    }
+    return e;
+  }
+
+  StatusOr<HierarchicalColors> Encode(HierarchicalSteps steps) {
+    if (steps.luma == 0 || steps.chroma == 0) return InvalidArgument("hierarchical color steps must be at least 1/16");
+    Header header{colors_.size(), steps, {}};
+    const double voxels = static_cast<double>(colors_.size());
+    header.root = {static_cast<int32_t>(std::lround(sums_[0][0][0] / voxels)),
+                   static_cast<int32_t>(std::lround(sums_[0][0][1] / voxels)),
+                   static_cast<int32_t>(std::lround(sums_[0][0][2] / voxels))};
+    EncoderSide side;
+    side.sums = std::move(sums_);
+    StatusOr<std::vector<Ycc>> voxels_rec = CodeLevels(tree_, header, side);
+    sums_ = std::move(side.sums);
+    if (!voxels_rec.ok()) return voxels_rec.status();
+    HierarchicalColors out;
+    out.steps = steps;
+    out.payload.push_back(kHierarchicalVersion);
+    PutVarint(out.payload, header.count);
+    PutU16(out.payload, steps.luma);
+    PutU16(out.payload, steps.chroma);
+    for (int32_t v : header.root) PutU16(out.payload, static_cast<uint16_t>(static_cast<int16_t>(v)));
+    const std::vector<uint8_t> coded = side.rc.Finish();
+    out.payload.insert(out.payload.end(), coded.begin(), coded.end());
+    out.decoded = ToRgb(*voxels_rec);
+    return out;
+  }
+
+  std::span<const Rgb8> colors() const { return colors_; }
+
+ private:
+  Octree tree_;
+  std::span<const Rgb8> colors_;
+  std::vector<std::vector<std::array<double, 3>>> sums_;
+};
+
+HierarchicalSteps StepsFor(double luma16) {
+  const auto to16 = [](double v) { return static_cast<uint16_t>(std::clamp(std::lround(v), 1L, 65535L)); };
+  return {to16(luma16), to16(luma16 * kChromaStepRatio)};
+}
+
+}  // namespace
+
+StatusOr<HierarchicalColors> EncodeHierarchicalColors(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
+                                                      HierarchicalSteps steps) {
+  ASSIGN_OR_RETURN(HierarchicalEncoder encoder, HierarchicalEncoder::Create(colors, morton));
+  return encoder.Encode(steps);
+}
+
+StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const Rgb8> colors,
+                                                               std::span<const uint64_t> morton, double target_psnr_y,
+                                                               uint32_t start) {
+  if (!std::isfinite(target_psnr_y) || target_psnr_y <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
+  ASSIGN_OR_RETURN(HierarchicalEncoder encoder, HierarchicalEncoder::Create(colors, morton));
+  // A uniform quantizer's error is step²/12: the step that would give the target's MSE, a bit
+  // coarser because the dead zone's zeros and the prediction leave many values untouched.
+  const double mse = 255.0 * 255.0 / std::pow(10.0, target_psnr_y / 10.0);
+  double step = start > 0 ? start : 16 * 1.1 * std::sqrt(12 * mse);
+  std::optional<HierarchicalColors> best;  // the largest step found to meet the target
+  double pass_step = 0, fail_step = 0;      // the bracket (0: not found yet)
+  double last_step = 0, last_margin = 0;
+  for (int round = 0; round < 10; ++round) {
+    const HierarchicalSteps steps = StepsFor(step);
+    ASSIGN_OR_RETURN(HierarchicalColors trial, encoder.Encode(steps));
+    const double margin = MeasureColorPsnr(colors, trial.decoded).y - target_psnr_y;
+    const double tried = steps.luma;
+    if (margin >= 0) {
+      if (tried > pass_step) pass_step = tried, best = std::move(trial);
+      if (margin < 0.05) break;
+    } else if (fail_step == 0 || tried < fail_step) {
+      fail_step = tried;
+    }
+    if (fail_step > 0 && fail_step <= 1) break;
+    if (pass_step > 0 && fail_step > 0 && fail_step - pass_step <= std::max(1.0, 0.02 * pass_step)) break;
+    if (pass_step >= 65535) break;
+    // Secant on (log step, PSNR) towards the target plus a little; ~5 dB per doubling to start.
+    double slope = -5.0 / std::log(2.0);
+    if (last_step > 0 && last_step != tried) {
+      const double s = (margin - last_margin) / (std::log(tried) - std::log(last_step));
+      if (s < -0.5) slope = s;
+    }
+    double next = std::exp(std::log(tried) + (0.02 - margin) / slope);
+    const double lo = pass_step > 0 ? pass_step : 1, hi = fail_step > 0 ? fail_step : 65535;
+    if (!(next > lo && next < hi)) next = pass_step > 0 && fail_step > 0 ? std::sqrt(lo * hi) : std::clamp(next, lo, hi);
+    last_step = tried, last_margin = margin;
+    if (std::lround(next) == std::lround(tried)) break;
+    step = next;
+  }
+  if (!best) {
+    return InvalidArgument("hierarchical colors cannot reach " + std::to_string(target_psnr_y) + " dB PSNR-Y on these colors");
+  }
+  return std::move(*best);
+}
+
+StatusOr<std::vector<Rgb8>> DecodeHierarchicalColors(std::span<const uint8_t> payload, uint64_t count,
+                                                     std::span<const uint64_t> morton) {
+  if (morton.size() != count) return Corrupt("hierarchical colors need the voxels' Morton codes (one color per voxel)");
+  size_t pos = 0;
+  if (payload.empty()) return Truncated("hierarchical colors: no header");
+  if (payload[pos++] != kHierarchicalVersion) return Unsupported("hierarchical colors of version " + std::to_string(payload[0]));
+  Header header;
+  if (!GetVarint(payload, pos, header.count)) return Truncated("hierarchical colors: header truncated");
+  if (header.count != count) return Corrupt("hierarchical colors hold a different number of colors than the geometry's voxels");
+  if (payload.size() < pos + 10) return Truncated("hierarchical colors: header truncated");
+  const auto u16 = [&] {
+    const uint16_t v = static_cast<uint16_t>(payload[pos] | payload[pos + 1] << 8);
+    pos += 2;
+    return v;
+  };
+  header.steps.luma = u16();
+  header.steps.chroma = u16();
+  for (int32_t& v : header.root) v = static_cast<int16_t>(u16());
+  if (header.steps.luma == 0 || header.steps.chroma == 0) return Corrupt("hierarchical colors: a step of 0");
+  ASSIGN_OR_RETURN(const Octree tree, hierarchical::BuildOctree(morton));
+  DecoderSide side(payload.subspan(pos));
+  ASSIGN_OR_RETURN(const std::vector<Ycc> voxels, CodeLevels(tree, header, side));
+  if (!side.rc.consumed_exactly()) return Corrupt("hierarchical colors: the coded stream is truncated or has trailing bytes");
+  return ToRgb(voxels);
+}
+
+}  // namespace pointdag
