@@ -194,10 +194,10 @@ describe('hostile tiles', () => {
     const withSection = (tag, change) => framePdag(sections.map(([name, d]) => [name, name === tag ? change(d.slice()) : d]));
     assert.equal(both(framePdag(sections, { major: 2 }), 'major version 2').code, 'Unsupported');
     assert.equal(both(withSection('geometry', (g) => { g[1] = 0; return g; }), 'zstd geometry').code, 'Unsupported');
-    for (const codec of [1, 4, 5, 6, 7]) {
+    for (const codec of [1, 4, 5, 6, 7, 8]) {
       assert.equal(both(withSection('colors', (c) => { c[0] = codec; return c; }), `colors codec ${codec}`).code, 'Unsupported');
     }
-    assert.equal(both(withSection('colors', (c) => { c[0] = 8; return c; }), 'colors codec 8').code, 'Corrupt');
+    assert.equal(both(withSection('colors', (c) => { c[0] = 9; return c; }), 'colors codec 9').code, 'Corrupt');
   });
 
   test('container rules: sections twice, missing, or empty', () => {

@@ -72,6 +72,8 @@ pointdag::Status RefuseUnsupported(const pointdag::PdagFile& file) {
     case pointdag::ColorCodec::kAstc:
       return pointdag::Unsupported("image-mapped colors (codec " + std::to_string(file.colors[0]) +
                                    ": png, jpeg, webp or astc) are not read by this decoder");
+    case pointdag::ColorCodec::kHierarchical:
+      return pointdag::Unsupported("hierarchical colors (codec 8) are not read by this decoder");
     default: return pointdag::Status::Ok();
   }
 }

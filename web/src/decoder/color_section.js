@@ -1,6 +1,7 @@
 // The colors section (proto/PDAG_FORMAT.md §3), dispatched on its first byte as
 // codec/pointdag/color/color_decode.cc DecodeColors does. Raw and the block codecs are read here;
-// lossless (zstd) and the image codecs (png, jpeg, webp, astc) are refused as 'Unsupported'.
+// lossless, the image codecs (png, jpeg, webp, astc) and the hierarchical colors (not random
+// access: for files, not the daemon's tiles) are refused as 'Unsupported', as web/wasm refuses them.
 import { decodeBlockColors } from './block_colors.js';
 import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
 
@@ -9,12 +10,14 @@ export const CODEC_LOSSLESS = 1;
 export const CODEC_FIXED3 = 2;
 export const CODEC_VBR = 3;
 const IMAGE_CODECS = new Set([4, 5, 6, 7]);  // png, jpeg, webp, astc
+export const CODEC_HIERARCHICAL = 8;
 const MAX_COLORS = 2 ** 32;
 
 // Why this decoder cannot read a colors section with this codec byte, or null when it can.
 export function unsupportedColorCodec(codec) {
   if (codec === CODEC_LOSSLESS) return 'lossless (zstd) colors';
   if (IMAGE_CODECS.has(codec)) return `image-mapped colors (codec ${codec}: png, jpeg, webp or astc)`;
+  if (codec === CODEC_HIERARCHICAL) return 'hierarchical colors (codec 8)';
   return null;
 }
 
