@@ -11,6 +11,7 @@
 #include "pointdag/color/hierarchical_octree.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/logistic.h"
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
@@ -53,9 +54,93 @@ constexpr auto kOffsets = [] {
 // side; the child's own face (2) and edge (1) neighbours already decoded (in earlier parents).
 constexpr int64_t kParentWeight = 8;
 
+// A predictor of the child in slot s: the parent-level cell `up` (index into the 27 around the
+// parent), at the children's level its child in `slot`, and the weight.
+struct Predictor {
+  uint8_t up, slot;
+  int8_t weight;
+};
+// Per slot: the parent's 6 neighbours on the child's side (3 faces, 3 edges).
+constexpr auto kParentSide = [] {
+  std::array<std::array<Predictor, 6>, 8> t{};
+  for (int s = 0; s < 8; ++s) {
+    int n = 0;
+    for (const Offset& o : kOffsets) {
+      bool toward = true;
+      for (int a = 0; a < 3; ++a) toward = toward && (o.d[a] == 0 || o.d[a] == (((s >> a) & 1) ? 1 : -1));
+      if (toward) t[s][n++] = {static_cast<uint8_t>(OffsetIndex(o.d[0], o.d[1], o.d[2])), 0, static_cast<int8_t>(o.nonzero == 1 ? 2 : 1)};
+    }
+  }
+  return t;
+}();
+// Per slot: the child's 12 face and edge neighbours outside its parent (the 6 inside are siblings,
+// decoded with it).
+constexpr auto kChildSide = [] {
+  std::array<std::array<Predictor, 12>, 8> t{};
+  for (int s = 0; s < 8; ++s) {
+    int n = 0;
+    for (const Offset& o : kOffsets) {
+      std::array<int, 3> inner{}, up{};
+      for (int a = 0; a < 3; ++a) {
+        const int v = ((s >> a) & 1) + o.d[a];
+        up[a] = v < 0 ? -1 : (v > 1 ? 1 : 0);
+        inner[a] = v & 1;
+      }
+      if (up[0] == 0 && up[1] == 0 && up[2] == 0) continue;
+      t[s][n++] = {static_cast<uint8_t>(OffsetIndex(up[0], up[1], up[2])), static_cast<uint8_t>(inner[0] | inner[1] << 1 | inner[2] << 2),
+                   static_cast<int8_t>(o.nonzero == 1 ? 2 : 1)};
+    }
+  }
+  return t;
+}();
+
+// The zero flag is a logistic mix (entropy/logistic.h) of three models, with weights per channel
+// and height (0..3) learnt as it codes.
+class ZeroMixer {
+ public:
+  static constexpr int kInputs = 3;
+  // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
+  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height) {
+    models_ = models;
+    weights_ = &weights[c][height];
+    int64_t dot = 0;
+    for (int k = 0; k < kInputs; ++k) {
+      stretched_[k] = kStretch[4096 - models[k]->P0()];
+      dot += int64_t{(*weights_)[k]} * stretched_[k];
+    }
+    p_zero_ = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
+    return FixedP0{static_cast<uint32_t>(4096 - p_zero_)};
+  }
+  void Update(int zero) {
+    const int32_t err = (zero << 12) - p_zero_;
+    for (int k = 0; k < kInputs; ++k) {
+      (*weights_)[k] = std::clamp((*weights_)[k] + ((stretched_[k] * err) >> 10), -(1 << 22), 1 << 22);
+      models_[k]->Update(zero);
+    }
+  }
+
+ private:
+  // Starting weights 0.4, 0.4, 0.3 (in 1/65536): the mix starts near the models' mean.
+  std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> weights = [] {
+    std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> t{};
+    for (auto& channel : t) channel.fill({26214, 26214, 19661});
+    return t;
+  }();
+  std::array<YoungBitModel*, kInputs> models_{};
+  std::array<int32_t, kInputs>* weights_ = nullptr;
+  std::array<int32_t, kInputs> stretched_{};
+  int32_t p_zero_ = 2048;
+};
+
 struct Models {
-  // zero flag: channel, activity, height (0..3), parent's nonzero count (0..2), local count (0..2)
+  // The zero flag's three models, all by channel and the parent's nonzero count (0..2) where listed:
+  //  - activity, height (0..3), parent's count, local count (0..2);
+  //  - butterfly stage (0..2), height (0..9), parent's count, local count;
+  //  - activity, the decoded face neighbours' nonzero values at this level (0, 1-2, 3+).
   YoungBitModel zero[3][9][4][3][3];
+  YoungBitModel zero_by_stage[3][3][10][3][3];
+  YoungBitModel zero_by_neighbours[3][9][3];
+  ZeroMixer zero_mixer;
   YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
   GammaModel magnitude[3][4];          // channel, height / 3
   BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
@@ -103,7 +188,7 @@ class EncoderSide {
     return v;
   }
   // Dead-zone quantization, then ±1 → 0 where the bits saved outweigh the error added.
-  static int32_t Quantize(double residual, int64_t step, const YoungBitModel& zero, const YoungBitModel& greater_one) {
+  static int32_t Quantize(double residual, int64_t step, FixedP0 zero, const YoungBitModel& greater_one) {
     const double u = std::fabs(residual) / static_cast<double>(step);
     int32_t m = static_cast<int32_t>(std::min(std::floor(u + kRounding), static_cast<double>(kMaxMagnitude)));
     if (m == 1) {
@@ -147,6 +232,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
     child_rec.assign(children.code.size(), Ycc{});
     child_nz.assign(children.code.size(), 0);
     const hierarchical::LevelIndex index(nodes.code);
+    std::vector<uint8_t> own_nz(nodes.code.size(), 0);  // per node: its nonzero values, all channels
     for (size_t i = 0; i < nodes.code.size(); ++i) {
       const uint32_t first = nodes.first_child[i], end = nodes.first_child[i + 1];
       if (end - first == 1) {  // a lone child: the parent's mean, nothing coded
@@ -163,6 +249,12 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
         }
         if (inside) neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])] = index.Find(cell);
       }
+      int near_nz = 0;  // the decoded face neighbours' nonzero values: 0, 1-2, 3+
+      for (const Offset& o : kOffsets) {
+        const int64_t n = neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])];
+        if (o.nonzero == 1 && n >= 0 && n < static_cast<int64_t>(i)) near_nz += own_nz[n];
+      }
+      near_nz = near_nz == 0 ? 0 : (near_nz <= 2 ? 1 : 2);
       std::array<int64_t, 3> lo, hi;
       for (int c = 0; c < 3; ++c) lo[c] = hi[c] = rec[i][c];
       const auto seen = [&](const Ycc& v) {
@@ -173,7 +265,6 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       for (uint32_t j = first; j < end; ++j) weight[children.code[j] & 7] = children.weight[j];
       for (uint32_t j = first; j < end; ++j) {
         const int slot = static_cast<int>(children.code[j] & 7);
-        const std::array<int, 3> side_of = {(slot & 1) ? 1 : -1, (slot & 2) ? 1 : -1, (slot & 4) ? 1 : -1};
         std::array<int64_t, 3> acc;
         for (int c = 0; c < 3; ++c) acc[c] = kParentWeight * rec[i][c];
         int64_t total = kParentWeight;
@@ -182,27 +273,16 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           total += w;
           seen(v);
         };
-        for (const Offset& o : kOffsets) {  // the parent's neighbours on the child's side
-          bool toward = true;
-          for (int a = 0; a < 3; ++a) toward = toward && (o.d[a] == 0 || o.d[a] == side_of[a]);
-          if (!toward) continue;
-          const int64_t n = neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])];
-          if (n >= 0) add(rec[n], o.nonzero == 1 ? 2 : 1);
+        for (const Predictor& p : kParentSide[slot]) {
+          const int64_t n = neighbour[p.up];
+          if (n >= 0) add(rec[n], p.weight);
         }
-        for (const Offset& o : kOffsets) {  // the child's neighbours, where their parents came first
-          std::array<int, 3> t, up;
-          for (int a = 0; a < 3; ++a) {
-            t[a] = ((slot >> a) & 1) + o.d[a];
-            up[a] = t[a] < 0 ? -1 : (t[a] > 1 ? 1 : 0);
-          }
-          if (up[0] == 0 && up[1] == 0 && up[2] == 0) continue;  // a sibling: decoded with this child
-          const int64_t n = neighbour[OffsetIndex(up[0], up[1], up[2])];
+        for (const Predictor& p : kChildSide[slot]) {  // decoded where their parent came first
+          const int64_t n = neighbour[p.up];
           if (n < 0 || n >= static_cast<int64_t>(i)) continue;
-          const int s = (t[0] & 1) | (t[1] & 1) << 1 | (t[2] & 1) << 2;
           const uint8_t mask = nodes.child_mask[n];
-          if (!((mask >> s) & 1)) continue;
-          add(child_rec[nodes.first_child[n] + std::popcount(static_cast<unsigned>(mask & ((1u << s) - 1)))],
-              o.nonzero == 1 ? 2 : 1);
+          if (!((mask >> p.slot) & 1)) continue;
+          add(child_rec[nodes.first_child[n] + std::popcount(static_cast<unsigned>(mask & ((1u << p.slot) - 1)))], p.weight);
         }
         for (int c = 0; c < 3; ++c) prediction[slot][c] = DivRound(acc[c], total);
       }
@@ -241,13 +321,20 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           const int local_ctx = c == 0 ? std::min(local[0], 2) : (c == 1 ? luma_nz : std::min(luma_nz + 2 * (value[1][k] != 0), 2));
           const int64_t from_luma = c > 0 ? DivRound(fit[c].Alpha() * value[0][k] * step[k][0], 4096) : 0;
           const int act = Activity(hi[c] - lo[c], st);
-          YoungBitModel& zero = models->zero[c][act][hctx][parent_nz][local_ctx];
+          const FixedP0 zero = models->zero_mixer.Mix(
+              {&models->zero[c][act][hctx][parent_nz][local_ctx],
+               &models->zero_by_stage[c][plan.butterfly[k].stage][std::min(height, 9)][parent_nz][local_ctx],
+               &models->zero_by_neighbours[c][act][near_nz]},
+              c, hctx);
           YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
           int32_t v = 0;
           if constexpr (Side::kEncode) {
             v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero, greater_one);
           }
-          if (!side.Bit(zero, v == 0)) {
+          FixedP0 coded_zero = zero;
+          const int is_zero = side.Bit(coded_zero, v == 0);
+          models->zero_mixer.Update(is_zero);
+          if (!is_zero) {
             uint32_t magnitude = 1;
             if (side.Bit(greater_one, std::abs(v) > 1)) {
               magnitude = 1 + side.Gamma(models->magnitude[c][mctx], static_cast<uint32_t>(std::abs(v) - 1));
@@ -275,6 +362,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
         for (uint32_t j = first; j < end; ++j) child_rec[j][c] = static_cast<int32_t>(means[children.code[j] & 7]);
       }
       for (uint32_t j = first; j < end; ++j) child_nz[j] = packed;
+      own_nz[i] = static_cast<uint8_t>(local[0] + local[1] + local[2]);
     }
     rec.swap(child_rec);
     nz.swap(child_nz);

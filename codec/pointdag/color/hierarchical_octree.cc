@@ -113,7 +113,7 @@ NodePlan PlanNode(uint8_t mask, std::span<const uint32_t, 8> weight) {
       const int b = a | 1 << k;
       const bool has_a = (present >> a) & 1, has_b = (present >> b) & 1;
       if (has_a && has_b) {
-        plan.butterfly[plan.count] = {static_cast<uint8_t>(a), static_cast<uint8_t>(b), w[a], w[b]};
+        plan.butterfly[plan.count] = {static_cast<uint8_t>(a), static_cast<uint8_t>(b), static_cast<uint8_t>(k), w[a], w[b]};
         plan.op[plan.ops++] = {static_cast<uint8_t>(a), static_cast<uint8_t>(b), static_cast<int8_t>(plan.count++)};
         w[a] += w[b];
       } else if (has_b) {

@@ -73,7 +73,7 @@ int64_t DifferenceStep(int64_t step, uint64_t wa, uint64_t wb);
 // The 2×2×2 butterflies of one node (RAHT's order: stage k pairs slots a and a | 1 << k, a with
 // its low k + 1 bits clear; a lone b moves to a). `count` butterflies, each a pair of groups.
 struct Butterfly {
-  uint8_t a, b;
+  uint8_t a, b, stage;
   uint32_t wa, wb;  // the groups' voxels
 };
 struct NodePlan {
