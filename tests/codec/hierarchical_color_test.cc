@@ -104,10 +104,10 @@ TEST(HierarchicalOctree, IntegerPartsAreExact) {
   const auto plan = hierarchical::PlanNode(0b01001011, weight);
   EXPECT_EQ(plan.count, 3);  // four children: three butterflies
   std::array<int64_t, 7> differences{};
-  std::array<int64_t, 8> sums{}, weights{};
+  std::array<int64_t, 8> weights{};
   const std::array<int64_t, 8> means = {100, -40, 0, 7, 0, 0, 900, 0};
-  for (int s = 0; s < 8; ++s) weights[s] = weight[s], sums[s] = weight[s] * means[s];
-  hierarchical::ForwardDifferences(plan, sums, weights, differences, hierarchical::DivRound);
+  for (int s = 0; s < 8; ++s) weights[s] = weight[s];
+  hierarchical::ForwardDifferences(plan, means, weights, differences, hierarchical::DivRound);
   std::array<int64_t, 8> back{};
   const int64_t mean = hierarchical::DivRound(3 * 100 - 40 + 2 * 7 + 5 * 900, 11);
   hierarchical::InverseMeans(plan, mean, std::span<const int64_t>(differences.data(), 3), back);

@@ -132,6 +132,27 @@ class ZeroMixer {
   int32_t p_zero_ = 2048;
 };
 
+// Which of the 27 cells around a node a child in slot s reads (bit OffsetIndex): its parent side at
+// any position in the level's order, and (with the face neighbours' nonzero counts) cells that must
+// come before the node: the only ones looked up.
+constexpr auto kParentSideCells = [] {
+  std::array<uint32_t, 8> t{};
+  for (int s = 0; s < 8; ++s) {
+    for (const Predictor& p : kParentSide[s]) t[s] |= 1u << p.up;
+  }
+  return t;
+}();
+constexpr auto kEarlierCells = [] {
+  std::array<uint32_t, 8> t{};
+  for (int s = 0; s < 8; ++s) {
+    for (const Predictor& p : kChildSide[s]) t[s] |= 1u << p.up;
+    for (const Offset& o : kOffsets) {
+      if (o.nonzero == 1) t[s] |= 1u << OffsetIndex(o.d[0], o.d[1], o.d[2]);
+    }
+  }
+  return t;
+}();
+
 struct Models {
   // The zero flag's three models, all by channel and the parent's nonzero count (0..2) where listed:
   //  - activity, height (0..3), parent's count, local count (0..2);
@@ -241,13 +262,20 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       }
       std::array<int64_t, 27> neighbour;
       neighbour.fill(-1);
+      uint32_t any_order = 0, earlier = 0;
+      for (uint8_t mask = nodes.child_mask[i], s = 0; s < 8; ++s) {
+        if ((mask >> s) & 1) any_order |= kParentSideCells[s], earlier |= kEarlierCells[s];
+      }
       for (const Offset& o : kOffsets) {
+        const int x = OffsetIndex(o.d[0], o.d[1], o.d[2]);
+        if (!(((any_order | earlier) >> x) & 1)) continue;
         uint64_t cell = nodes.code[i];
         bool inside = true;
         for (int a = 0; a < 3 && inside; ++a) {
           if (o.d[a] != 0) inside = hierarchical::StepCell(cell, a, o.d[a], l, cell);
         }
-        if (inside) neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])] = index.Find(cell);
+        // A cell after the node in the level's order is read only as a parent-side predictor.
+        if (inside && (cell < nodes.code[i] || ((any_order >> x) & 1))) neighbour[x] = index.Find(cell);
       }
       int near_nz = 0;  // the decoded face neighbours' nonzero values: 0, 1-2, 3+
       for (const Offset& o : kOffsets) {
@@ -292,16 +320,16 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       std::array<std::array<int64_t, 7>, 3> predicted{}, decoded{};
       std::array<std::array<double, 7>, 3> truth{};
       for (int c = 0; c < 3; ++c) {
-        std::array<int64_t, 8> sums{};
-        for (int s = 0; s < 8; ++s) sums[s] = weights64[s] * prediction[s][c];
-        hierarchical::ForwardDifferences(plan, sums, weights64, predicted[c], DivRound);
+        std::array<int64_t, 8> means{};
+        for (int s = 0; s < 8; ++s) means[s] = prediction[s][c];
+        hierarchical::ForwardDifferences(plan, means, weights64, predicted[c], DivRound);
         if constexpr (Side::kEncode) {
-          std::array<double, 8> true_sums{}, true_weights{};
+          std::array<double, 8> true_means{}, true_weights{};
           for (uint32_t j = first; j < end; ++j) {
-            true_sums[children.code[j] & 7] = side.sums[l + 1][j][c];
             true_weights[children.code[j] & 7] = children.weight[j];
+            true_means[children.code[j] & 7] = side.sums[l + 1][j][c] / children.weight[j];
           }
-          hierarchical::ForwardDifferences(plan, true_sums, true_weights, truth[c],
+          hierarchical::ForwardDifferences(plan, true_means, true_weights, truth[c],
                                            [](double sum, double w) { return sum / w; });
         }
       }

@@ -88,21 +88,25 @@ struct NodePlan {
 };
 NodePlan PlanNode(uint8_t mask, std::span<const uint32_t, 8> weight);
 
-// The butterflies' mean differences of per-slot weighted sums (sums[s] = weight × mean, weights[s]
-// the slot's voxels): `mean(sum, weight)` divides, rounding in the decoder's integers (DivRound) or
-// exactly in the encoder's doubles (its true colors).
-template <typename T, typename Mean>
-void ForwardDifferences(const NodePlan& plan, std::array<T, 8> sums, std::array<T, 8> weights,
-                        std::array<T, 7>& differences, Mean mean) {
+// The butterflies' differences of group means, from the slots' means and weights (voxels): a
+// merged group's mean is `divide(Σ weight × mean, Σ weight)`, rounding in the decoder's integers
+// (DivRound) or exact in the encoder's doubles (its true colors); a lone slot's is its own.
+template <typename T, typename Divide>
+void ForwardDifferences(const NodePlan& plan, std::array<T, 8> means, std::array<T, 8> weights,
+                        std::array<T, 7>& differences, Divide divide) {
+  std::array<T, 8> sums{};
+  std::array<bool, 8> merged{};
+  const auto mean = [&](int s) { return merged[s] ? divide(sums[s], weights[s]) : means[s]; };
   for (int o = 0; o < plan.ops; ++o) {
     const NodePlan::Op& op = plan.op[o];
     if (op.butterfly >= 0) {
-      differences[op.butterfly] = mean(sums[op.b], weights[op.b]) - mean(sums[op.a], weights[op.a]);
-      sums[op.a] += sums[op.b];
+      differences[op.butterfly] = mean(op.b) - mean(op.a);
+      if (!merged[op.a]) sums[op.a] = means[op.a] * weights[op.a];
+      sums[op.a] += merged[op.b] ? sums[op.b] : means[op.b] * weights[op.b];
       weights[op.a] += weights[op.b];
+      merged[op.a] = true;
     } else {
-      sums[op.a] = sums[op.b];
-      weights[op.a] = weights[op.b];
+      means[op.a] = means[op.b], sums[op.a] = sums[op.b], weights[op.a] = weights[op.b], merged[op.a] = merged[op.b];
     }
   }
 }
