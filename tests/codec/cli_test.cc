@@ -76,7 +76,7 @@ TEST(Cli, CompareReportsUsAndDracoOnTheSameVoxels) {
     }
     EXPECT_GT(codec["color_bits_per_voxel"].get<double>(), 0.0);
   }
-  for (const char* name : {"vbr", "fixed3", "jpeg", "webp"}) {
+  for (const char* name : {"vbr", "fixed3", "hierarchical", "jpeg", "webp"}) {
     for (int target : {30, 34, 38, 42}) EXPECT_EQ(seen.count({name, target}), 1u) << name << " " << target;
   }
   EXPECT_EQ(seen.count({"lossless", 0}), 1u);

@@ -39,7 +39,7 @@ nlohmann::json OursRows(const nlohmann::json& codecs, const std::vector<double>&
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& c : codecs) {
     const std::string name = c["name"];
-    if (name == "vbr" || name == "fixed3") rows.push_back(Row(c, name));
+    if (name == "vbr" || name == "fixed3" || name == "hierarchical") rows.push_back(Row(c, name));
     if (name == "lossless") rows.push_back(Row(c, "lossless"));
   }
   for (double target : targets) {

@@ -3,7 +3,7 @@
 //
 // Sizes and qualities are `pointdag compare`'s scorecard (codec/pointdag/compare/scorecard.h) for the
 // same scan and voxel size, so they equal what `pointdag compare --voxel S --json` prints. Per case:
-// VBR and fixed3 at every target, the smallest image mapping that met each target, lossless colors;
+// VBR, fixed3 and hierarchical at every target, the smallest image mapping that met each target, lossless colors;
 // speeds in voxels per second on the same voxels: our encode (DAG, stored geometry, VBR colors at
 // 38 dB) and decode (the whole .pdag back to voxels and colors) against Draco's -cl 10 encode and its
 // decode; the process's peak RSS.

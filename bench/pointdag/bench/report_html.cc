@@ -90,7 +90,8 @@ std::string Level(const Axes& a, double y, const char* color, const std::string&
   return buf;
 }
 
-const std::map<std::string, const char*> kColors = {{"vbr", "#1f77b4"}, {"fixed3", "#9467bd"}, {"image", "#ff7f0e"}};
+const std::map<std::string, const char*> kColors = {
+    {"vbr", "#1f77b4"}, {"fixed3", "#9467bd"}, {"hierarchical", "#8c564b"}, {"image", "#ff7f0e"}};
 
 std::string RateDistortionSvg(const nlohmann::json& c) {
   std::map<std::string, std::vector<std::pair<double, double>>> curves;
@@ -185,7 +186,8 @@ std::string ReportHtml(const nlohmann::json& report, const std::vector<nlohmann:
          Fixed(JsonNumber(speed, "draco_decode_points_per_second") / 1e6, 2) + "</td><td>" + Fixed(JsonNumber(c, "peak_rss_bytes") / 1048576.0, 0) +
          "</td></tr>";
   }
-  h += "</table><p>Plots: <b style='color:#1f77b4'>VBR</b>, <b style='color:#9467bd'>fixed3</b>, <b style='color:#ff7f0e'>best "
+  h += "</table><p>Plots: <b style='color:#1f77b4'>VBR</b>, <b style='color:#9467bd'>fixed3</b>, <b style='color:#8c564b'>"
+       "hierarchical</b>, <b style='color:#ff7f0e'>best "
        "image mapping</b> (bits per point against PSNR-Y); dashed, the lossless totals: <b style='color:#2ca02c'>ours</b> and "
        "<b style='color:#d62728'>Draco's</b>. Trends: VBR at 38 dB (blue) and lossless (green) over the reports in this folder.</p>";
   for (const auto& c : report.value("cases", nlohmann::json::array())) {

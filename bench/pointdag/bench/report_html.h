@@ -1,6 +1,6 @@
 // report.html: the nightly report for people. One self-contained page (inline CSS and SVG, no
 // scripts): the run's provenance, a summary table, per case a rate-distortion plot (bits per point
-// against PSNR-Y: VBR, fixed3 and the best image mapping, with our lossless and Draco's lossless
+// against PSNR-Y: VBR, fixed3, hierarchical and the best image mapping, with our lossless and Draco's lossless
 // totals as lines) and the trend of its bits per point across `history` (older reports, oldest first).
 #pragma once
 

@@ -22,7 +22,7 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan, std::span<const
   nlohmann::json codecs = nlohmann::json::array();
   if (scan.grid.has_color()) {
     std::vector<ColorEncodeOptions> trials;
-    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate}) {
+    for (ColorCodec codec : {ColorCodec::kVariableRate, ColorCodec::kFixedRate, ColorCodec::kHierarchical}) {
       for (double target : targets) trials.push_back({codec, target});
     }
     // The 2D mapping (Paper IIA) along both curves.
@@ -41,7 +41,8 @@ StatusOr<nlohmann::json> BuildScorecard(const EncodedScan& scan, std::span<const
       const EncodedColors& colors = *encoded;
       ASSIGN_OR_RETURN(const std::vector<Rgb8> decoded, DecodeColors(colors.bytes, scan.grid.colors.size(), scan.grid.morton));
       const double color_bits = bpv(colors.bytes.size());
-      const bool image = trial.codec >= ColorCodec::kPng;
+      const bool image = trial.codec == ColorCodec::kPng || trial.codec == ColorCodec::kJpeg ||
+                         trial.codec == ColorCodec::kWebp || trial.codec == ColorCodec::kAstc;
       codecs.push_back({{"name", ColorCodecName(trial.codec)},
                         {"curve", image ? nlohmann::json(CurveName(trial.curve)) : nlohmann::json()},
                         {"target_psnr", trial.target_psnr_y ? nlohmann::json(*trial.target_psnr_y) : nlohmann::json()},
