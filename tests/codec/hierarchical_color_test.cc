@@ -78,6 +78,27 @@ TEST(HierarchicalColors, FinerStepsCostMoreAndErrLess) {
   EXPECT_GT(MeasureColorPsnr(colors, finest->decoded).rgb, 48);
 }
 
+// A smooth gradient stays far above a low target at almost every step (the prediction gets it nearly
+// right) and its PSNR is not monotone in the step near the target: the search still meets the target
+// within a dB, in at most 6 encodes.
+TEST(HierarchicalColors, TargetSearchCrossesFlatCurvesInFewEncodes) {
+  std::vector<uint64_t> dense(16384);
+  for (size_t i = 0; i < dense.size(); ++i) dense[i] = i;
+  std::vector<Rgb8> colors(dense.size());
+  for (size_t i = 0; i < dense.size(); ++i) {
+    const auto [x, y, z] = MortonDecode(dense[i]);
+    colors[i] = {static_cast<uint8_t>(8 * x), static_cast<uint8_t>(8 * y), static_cast<uint8_t>(4 * (x + z))};
+  }
+  for (double target : {30.0, 45.0}) {
+    auto coded = EncodeHierarchicalColorsForTarget(colors, dense, target);
+    ASSERT_TRUE(coded.ok()) << coded.status().ToString();
+    const double psnr = MeasureColorPsnr(colors, coded->decoded).y;
+    EXPECT_GE(psnr, target);
+    EXPECT_LT(psnr, target + 1) << "the search lands near the target";
+    EXPECT_LE(coded->encodes, 6) << target << " dB";
+  }
+}
+
 // The octree's fixed point: steps along an axis in Morton codes, the per-butterfly step, the
 // transform's inverse keeping the group's weighted mean.
 TEST(HierarchicalOctree, IntegerPartsAreExact) {

@@ -144,7 +144,7 @@ StatusOr<EncodedColors> EncodeHierarchicalAt(std::span<const Rgb8> colors, std::
   out.codec = ColorCodec::kHierarchical;
   out.psnr = MeasureColorPsnr(colors, coded.decoded);
   out.max_mse = coded.steps.luma / 16.0;
-  out.encodes = 1;
+  out.encodes = coded.encodes;
   out.bytes.push_back(static_cast<uint8_t>(ColorCodec::kHierarchical));
   out.bytes.insert(out.bytes.end(), coded.payload.begin(), coded.payload.end());
   return out;

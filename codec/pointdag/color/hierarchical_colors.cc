@@ -27,6 +27,7 @@ constexpr uint32_t kMaxMagnitude = uint32_t{1} << 24;
 constexpr double kRounding = 0.45;      // quantizer offset below 0.5: a dead zone around 0
 constexpr double kRdoLambda = 0.1;      // λ of the ±1 → 0 decision, in squared steps per bit
 constexpr double kChromaStepRatio = 1.5;
+constexpr int kMaxSearchEncodes = 6;  // the benchmark scans take 2-3; a flat curve's best passing step is kept
 
 // A node's 18 face and edge neighbours, as steps of −1/0/+1 along Morton bit positions 0, 1, 2.
 struct Offset {
@@ -487,28 +488,39 @@ StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const R
   double step = start > 0 ? start : 16 * 1.1 * std::sqrt(12 * mse);
   std::optional<HierarchicalColors> best;  // the largest step found to meet the target
   double pass_step = 0, fail_step = 0;      // the bracket (0: not found yet)
+  size_t fail_bytes = 0;
+  int encodes = 0;
   double last_step = 0, last_margin = 0;
-  for (int round = 0; round < 10; ++round) {
+  for (int round = 0; round < kMaxSearchEncodes; ++round) {
     const HierarchicalSteps steps = StepsFor(step);
     ASSIGN_OR_RETURN(HierarchicalColors trial, encoder.Encode(steps));
+    ++encodes;
     const double margin = MeasureColorPsnr(colors, trial.decoded).y - target_psnr_y;
     const double tried = steps.luma;
     if (margin >= 0) {
       if (tried > pass_step) pass_step = tried, best = std::move(trial);
       if (margin < 0.05) break;
     } else if (fail_step == 0 || tried < fail_step) {
-      fail_step = tried;
+      fail_step = tried, fail_bytes = trial.payload.size();
     }
+    // Near the target, where the rate no longer follows the step: within 1 % of the bracket's bytes.
+    if (best && fail_step > 0 && best->payload.size() <= fail_bytes + fail_bytes / 100) break;
     if (fail_step > 0 && fail_step <= 1) break;
     if (pass_step > 0 && fail_step > 0 && fail_step - pass_step <= std::max(1.0, 0.02 * pass_step)) break;
     if (pass_step >= 65535) break;
     // Secant on (log step, PSNR) towards the target plus a little; ~5 dB per doubling to start.
     double slope = -5.0 / std::log(2.0);
+    bool flat = false;  // PSNR-Y moved less than 1 dB per doubling of the step
     if (last_step > 0 && last_step != tried) {
       const double s = (margin - last_margin) / (std::log(tried) - std::log(last_step));
       if (s < -0.5) slope = s;
+      flat = s > -1.0 / std::log(2.0);
     }
     double next = std::exp(std::log(tried) + (0.02 - margin) / slope);
+    // Colors the prediction gets nearly right stay far from the target whatever the step (a smooth
+    // gradient): until it is bracketed, such a curve is crossed in strides of 8×.
+    if (flat && fail_step == 0) next = std::max(next, tried * 8);
+    if (flat && pass_step == 0) next = std::min(next, tried / 8);
     const double lo = pass_step > 0 ? pass_step : 1, hi = fail_step > 0 ? fail_step : 65535;
     if (!(next > lo && next < hi)) next = pass_step > 0 && fail_step > 0 ? std::sqrt(lo * hi) : std::clamp(next, lo, hi);
     last_step = tried, last_margin = margin;
@@ -518,6 +530,7 @@ StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const R
   if (!best) {
     return InvalidArgument("hierarchical colors cannot reach " + std::to_string(target_psnr_y) + " dB PSNR-Y on these colors");
   }
+  best->encodes = encodes;
   return std::move(*best);
 }
 

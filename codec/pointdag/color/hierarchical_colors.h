@@ -32,6 +32,7 @@ struct HierarchicalColors {
   std::vector<uint8_t> payload;  // after the codec byte
   std::vector<Rgb8> decoded;     // what DecodeHierarchicalColors returns for it
   HierarchicalSteps steps;
+  int encodes = 1;  // whole encodes it took (a target's search: 2-5)
 };
 
 // `colors`: one per voxel of `morton` (strictly ascending), in that order.
