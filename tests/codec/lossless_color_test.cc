@@ -17,26 +17,17 @@
 #include "pointdag/color/lossless_context.h"
 #include "pointdag/entropy/varint.h"
 #include "pointdag/voxelize/morton.h"
+#include "test_util.h"
 
 namespace pointdag {
 namespace {
+
+using testing::SheetMorton;
 
 std::vector<uint64_t> DenseMorton(size_t n) {
   std::vector<uint64_t> m(n);
   for (size_t i = 0; i < n; ++i) m[i] = i;
   return m;
-}
-
-// Sorted unique codes on a thin sheet, touching the grid's lowest and highest coordinates.
-std::vector<uint64_t> SheetMorton(size_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  constexpr uint32_t kMax = (1u << kMaxDepth) - 1;
-  std::set<uint64_t> codes = {MortonEncode(0, 0, 0), MortonEncode(kMax, kMax, kMax), MortonEncode(kMax, 0, 1)};
-  while (codes.size() < n) {
-    const uint32_t x = rng() % 64, y = rng() % 64;
-    codes.insert(MortonEncode(x, y, (x + y) / 8));
-  }
-  return {codes.begin(), codes.end()};
 }
 
 std::vector<Rgb8> RandomColors(size_t n, uint32_t seed) {

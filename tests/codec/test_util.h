@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
 
 #include "pointdag/read/byte_io.h"
+#include "pointdag/voxelize/morton.h"
 
 namespace pointdag::testing {
 
@@ -57,6 +59,19 @@ struct CliRun {
 
 // Runs the real `pointdag` binary, after `env` (VAR=value ...) when given; stderr is captured through a file.
 CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env = "");
+
+// Sorted unique Morton codes on a thin sheet, with the grid's lowest and highest corners (depth 21:
+// every Morton bit): voxels as a surface scan gives them, for the color coders' tests.
+inline std::vector<uint64_t> SheetMorton(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  constexpr uint32_t kMax = (1u << kMaxDepth) - 1;
+  std::set<uint64_t> codes = {MortonEncode(0, 0, 0), MortonEncode(kMax, kMax, kMax), MortonEncode(kMax, 0, 1)};
+  while (codes.size() < n) {
+    const uint32_t x = rng() % 64, y = rng() % 64;
+    codes.insert(MortonEncode(x, y, (x + y) / 8));
+  }
+  return {codes.begin(), codes.end()};
+}
 
 inline void WriteBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
