@@ -8,17 +8,21 @@
 #include <optional>
 #include <type_traits>
 
+#include "pointdag/color/hierarchical_models.h"
 #include "pointdag/color/hierarchical_octree.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/binary_range_coder.h"
-#include "pointdag/entropy/logistic.h"
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
 namespace {
 
+using hierarchical::Activity;
 using hierarchical::Butterfly;
+using hierarchical::ChromaFit;
 using hierarchical::DivRound;
+using hierarchical::MagnitudeBucket;
+using hierarchical::Models;
 using hierarchical::Octree;
 using hierarchical::OctreeLevel;
 using hierarchical::Ycc;
@@ -26,7 +30,6 @@ using hierarchical::Ycc;
 constexpr uint32_t kMaxMagnitude = uint32_t{1} << 24;
 constexpr double kRounding = 0.45;      // quantizer offset below 0.5: a dead zone around 0
 constexpr double kRdoLambda = 0.1;      // λ of the ±1 → 0 decision, in squared steps per bit
-constexpr double kChromaStepRatio = 1.5;
 constexpr int kMaxSearchEncodes = 6;  // the benchmark scans take 2-3; a flat curve's best passing step is kept
 
 // A node's 18 face and edge neighbours, as steps of −1/0/+1 along Morton bit positions 0, 1, 2.
@@ -95,44 +98,6 @@ constexpr auto kChildSide = [] {
   return t;
 }();
 
-// The zero flag is a logistic mix (entropy/logistic.h) of three models, with weights per channel
-// and height (0..3) learnt as it codes.
-class ZeroMixer {
- public:
-  static constexpr int kInputs = 3;
-  // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
-  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height) {
-    models_ = models;
-    weights_ = &weights[c][height];
-    int64_t dot = 0;
-    for (int k = 0; k < kInputs; ++k) {
-      stretched_[k] = kStretch[4096 - models[k]->P0()];
-      dot += int64_t{(*weights_)[k]} * stretched_[k];
-    }
-    p_zero_ = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
-    return FixedP0{static_cast<uint32_t>(4096 - p_zero_)};
-  }
-  void Update(int zero) {
-    const int32_t err = (zero << 12) - p_zero_;
-    for (int k = 0; k < kInputs; ++k) {
-      (*weights_)[k] = std::clamp((*weights_)[k] + ((stretched_[k] * err) >> 10), -(1 << 22), 1 << 22);
-      models_[k]->Update(zero);
-    }
-  }
-
- private:
-  // Starting weights 0.4, 0.4, 0.3 (in 1/65536): the mix starts near the models' mean.
-  std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> weights = [] {
-    std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> t{};
-    for (auto& channel : t) channel.fill({26214, 26214, 19661});
-    return t;
-  }();
-  std::array<YoungBitModel*, kInputs> models_{};
-  std::array<int32_t, kInputs>* weights_ = nullptr;
-  std::array<int32_t, kInputs> stretched_{};
-  int32_t p_zero_ = 2048;
-};
-
 // Which of the 27 cells around a node a child in slot s reads (bit OffsetIndex): its parent side at
 // any position in the level's order, and (with the face neighbours' nonzero counts) cells that must
 // come before the node: the only ones looked up.
@@ -153,39 +118,6 @@ constexpr auto kEarlierCells = [] {
   }
   return t;
 }();
-
-struct Models {
-  // The zero flag's three models, all by channel and the parent's nonzero count (0..2) where listed:
-  //  - activity, height (0..3), parent's count, local count (0..2);
-  //  - butterfly stage (0..2), height (0..9), parent's count, local count;
-  //  - activity, the decoded face neighbours' nonzero values at this level (0, 1-2, 3+).
-  YoungBitModel zero[3][9][4][3][3];
-  YoungBitModel zero_by_stage[3][3][10][3][3];
-  YoungBitModel zero_by_neighbours[3][9][3];
-  ZeroMixer zero_mixer;
-  YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
-  GammaModel magnitude[3][4];          // channel, height / 3
-  BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
-};
-
-// Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
-struct ChromaFit {
-  int64_t sxy = 0, sxx = 0;
-  int64_t Alpha() const { return sxx == 0 ? 0 : std::clamp<int64_t>(DivRound(sxy * 4096, sxx), -8192, 8192); }
-  void Add(int32_t luma_value, int64_t chroma_difference, int64_t luma_step) {
-    const int64_t y = std::clamp<int64_t>(luma_value, -1024, 1024);
-    const int64_t c = std::clamp<int64_t>(DivRound(chroma_difference * 256, luma_step), -(1 << 20), 1 << 20);
-    sxy += y * c;
-    sxx += y * y * 256;
-    while (sxx > (int64_t{1} << 40) || std::abs(sxy) > (int64_t{1} << 40)) sxy >>= 1, sxx >>= 1;
-  }
-};
-
-// How large a difference the neighbourhood's spread suggests, in steps: log2 buckets 0..8.
-int Activity(int64_t spread, int64_t step) {
-  const int64_t e = (spread << 8) / step;
-  return e == 0 ? 0 : std::clamp(static_cast<int>(std::bit_width(static_cast<uint64_t>(e))) - 5, 0, 8);
-}
 
 struct Header {
   uint64_t count = 0;
@@ -250,11 +182,12 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
     const int height = tree.depth - 1 - l;
     const int64_t luma_step = hierarchical::LevelStep(header.steps.luma, height);
     const int64_t chroma_step = hierarchical::LevelStep(header.steps.chroma, height);
-    const int hctx = std::min(height, 3), mctx = std::min(height / 3, 3);
+    const int hctx = std::min(height, 3);
     child_rec.assign(children.code.size(), Ycc{});
     child_nz.assign(children.code.size(), 0);
     const hierarchical::LevelIndex index(nodes.code);
     std::vector<uint8_t> own_nz(nodes.code.size(), 0);  // per node: its nonzero values, all channels
+    std::vector<std::array<uint8_t, 3>> own_magnitude(nodes.code.size());  // per node and channel: Σ |value|, capped at 255
     for (size_t i = 0; i < nodes.code.size(); ++i) {
       const uint32_t first = nodes.first_child[i], end = nodes.first_child[i + 1];
       if (end - first == 1) {  // a lone child: the parent's mean, nothing coded
@@ -279,9 +212,13 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
         if (inside && (cell < nodes.code[i] || ((any_order >> x) & 1))) neighbour[x] = index.Find(cell);
       }
       int near_nz = 0;  // the decoded face neighbours' nonzero values: 0, 1-2, 3+
+      std::array<uint32_t, 3> near_magnitude = {0, 0, 0};  // and their Σ |value| per channel
       for (const Offset& o : kOffsets) {
         const int64_t n = neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])];
-        if (o.nonzero == 1 && n >= 0 && n < static_cast<int64_t>(i)) near_nz += own_nz[n];
+        if (o.nonzero == 1 && n >= 0 && n < static_cast<int64_t>(i)) {
+          near_nz += own_nz[n];
+          for (int c = 0; c < 3; ++c) near_magnitude[c] += own_magnitude[n][c];
+        }
       }
       near_nz = near_nz == 0 ? 0 : (near_nz <= 2 ? 1 : 2);
       std::array<int64_t, 3> lo, hi;
@@ -341,7 +278,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
                    hierarchical::DifferenceStep(chroma_step, bf.wa, bf.wb)};
       }
       std::array<std::array<int32_t, 7>, 3> value{};
-      std::array<int, 3> local = {0, 0, 0};
+      std::array<int, 3> local = {0, 0, 0}, magnitudes = {0, 0, 0};
       for (int k = plan.count - 1; k >= 0; --k) {
         for (int c = 0; c < 3; ++c) {
           const int64_t st = step[k][c == 0 ? 0 : 1];
@@ -353,7 +290,9 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           const FixedP0 zero = models->zero_mixer.Mix(
               {&models->zero[c][act][hctx][parent_nz][local_ctx],
                &models->zero_by_stage[c][plan.butterfly[k].stage][std::min(height, 9)][parent_nz][local_ctx],
-               &models->zero_by_neighbours[c][act][near_nz]},
+               &models->zero_by_neighbours[c][act][near_nz],
+               &models->zero_by_prediction[c][hctx][MagnitudeBucket(static_cast<uint64_t>(4 * std::abs(predicted[c][k]) / st))]
+                                          [MagnitudeBucket(near_magnitude[c])]},
               c, hctx);
           YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
           int32_t v = 0;
@@ -366,7 +305,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           if (!is_zero) {
             uint32_t magnitude = 1;
             if (side.Bit(greater_one, std::abs(v) > 1)) {
-              magnitude = 1 + side.Gamma(models->magnitude[c][mctx], static_cast<uint32_t>(std::abs(v) - 1));
+              magnitude = 1 + side.Gamma(models->magnitude[c][act], static_cast<uint32_t>(std::abs(v) - 1));
               if (magnitude > kMaxMagnitude || magnitude < 2) return Corrupt("hierarchical colors: a coefficient is out of range");
             }
             const int64_t p = predicted[c][k];
@@ -379,6 +318,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           }
           value[c][k] = v;
           local[c] += v != 0;
+          magnitudes[c] += std::abs(v);
           const int64_t coded = from_luma + int64_t{v} * st;
           decoded[c][k] = std::clamp(predicted[c][k] + coded, -hierarchical::kDifferenceLimit, hierarchical::kDifferenceLimit);
           if (c > 0 && value[0][k] != 0) fit[c].Add(value[0][k], coded, step[k][0]);
@@ -392,6 +332,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       }
       for (uint32_t j = first; j < end; ++j) child_nz[j] = packed;
       own_nz[i] = static_cast<uint8_t>(local[0] + local[1] + local[2]);
+      for (int c = 0; c < 3; ++c) own_magnitude[i][c] = static_cast<uint8_t>(std::min(magnitudes[c], 255));
     }
     rec.swap(child_rec);
     nz.swap(child_nz);
@@ -464,9 +405,14 @@ class HierarchicalEncoder {
   std::vector<std::vector<std::array<double, 3>>> sums_;
 };
 
-HierarchicalSteps StepsFor(double luma16) {
+// Chroma's step over luma's: PSNR-Y ignores chroma, so coarser chroma is free bits, up to where
+// PSNR-RGB would fall below VBR's at the same PSNR-Y (docs/benchmarks.md): 1.5 up to 36 dB, rising
+// to 2 at 42 dB, where the scans' PSNR-RGB has more room.
+double ChromaStepRatio(double target_psnr_y) { return std::clamp(1.5 + (target_psnr_y - 36) / 12, 1.5, 2.0); }
+
+HierarchicalSteps StepsFor(double luma16, double chroma_ratio) {
   const auto to16 = [](double v) { return static_cast<uint16_t>(std::clamp(std::lround(v), 1L, 65535L)); };
-  return {to16(luma16), to16(luma16 * kChromaStepRatio)};
+  return {to16(luma16), to16(luma16 * chroma_ratio)};
 }
 
 }  // namespace
@@ -492,7 +438,7 @@ StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const R
   int encodes = 0;
   double last_step = 0, last_margin = 0;
   for (int round = 0; round < kMaxSearchEncodes; ++round) {
-    const HierarchicalSteps steps = StepsFor(step);
+    const HierarchicalSteps steps = StepsFor(step, ChromaStepRatio(target_psnr_y));
     ASSIGN_OR_RETURN(HierarchicalColors trial, encoder.Encode(steps));
     ++encodes;
     const double margin = MeasureColorPsnr(colors, trial.decoded).y - target_psnr_y;

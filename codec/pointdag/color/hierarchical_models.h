@@ -1,0 +1,96 @@
+// The hierarchical colors' (hierarchical_colors.cc) adaptive models: the zero flag's logistic mix of
+// four context models, the other flags' and magnitudes' models, and chroma's fit to luma. Everything
+// here is integer arithmetic that a decoder repeats bit for bit (proto/PDAG_FORMAT.md §3).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <cstdlib>
+
+#include "pointdag/color/hierarchical_octree.h"
+#include "pointdag/entropy/adaptive_codes.h"
+#include "pointdag/entropy/binary_range_coder.h"
+#include "pointdag/entropy/logistic.h"
+
+namespace pointdag::hierarchical {
+
+// The zero flag is a logistic mix (entropy/logistic.h) of four models, with weights per channel
+// and height (0..3) learnt as it codes.
+class ZeroMixer {
+ public:
+  static constexpr int kInputs = 4;
+  // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
+  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height) {
+    models_ = models;
+    weights_ = &weights[c][height];
+    int64_t dot = 0;
+    for (int k = 0; k < kInputs; ++k) {
+      stretched_[k] = kStretch[4096 - models[k]->P0()];
+      dot += int64_t{(*weights_)[k]} * stretched_[k];
+    }
+    p_zero_ = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
+    return FixedP0{static_cast<uint32_t>(4096 - p_zero_)};
+  }
+  void Update(int zero) {
+    const int32_t err = (zero << 12) - p_zero_;
+    for (int k = 0; k < kInputs; ++k) {
+      (*weights_)[k] = std::clamp((*weights_)[k] + ((stretched_[k] * err) >> 10), -(1 << 22), 1 << 22);
+      models_[k]->Update(zero);
+    }
+  }
+
+ private:
+  // Starting weights 0.4, 0.4, 0.3, 0.3 (in 1/65536): the mix starts a little above the models' mean.
+  std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> weights = [] {
+    std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> t{};
+    for (auto& channel : t) channel.fill({26214, 26214, 19661, 19661});
+    return t;
+  }();
+  std::array<YoungBitModel*, kInputs> models_{};
+  std::array<int32_t, kInputs>* weights_ = nullptr;
+  std::array<int32_t, kInputs> stretched_{};
+  int32_t p_zero_ = 2048;
+};
+
+struct Models {
+  // The zero flag's four models, all by channel and the parent's nonzero count (0..2) where listed:
+  //  - activity, height (0..3), parent's count, local count (0..2);
+  //  - butterfly stage (0..2), height (0..9), parent's count, local count;
+  //  - activity, the decoded face neighbours' nonzero values at this level (0, 1-2, 3+);
+  //  - height (0..3), the predicted difference in quarter steps and the decoded face neighbours'
+  //    magnitudes in this channel at this level (MagnitudeBucket both).
+  YoungBitModel zero[3][9][4][3][3];
+  YoungBitModel zero_by_stage[3][3][10][3][3];
+  YoungBitModel zero_by_neighbours[3][9][3];
+  YoungBitModel zero_by_prediction[3][4][5][5];
+  ZeroMixer zero_mixer;
+  YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
+  GammaModel magnitude[3][9];          // channel, activity
+  BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
+};
+
+// 0, 1, 2-3, 4-7, 8+: bit_width capped at 4.
+inline int MagnitudeBucket(uint64_t v) { return std::min(static_cast<int>(std::bit_width(v)), 4); }
+
+// Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
+struct ChromaFit {
+  int64_t sxy = 0, sxx = 0;
+  int64_t Alpha() const { return sxx == 0 ? 0 : std::clamp<int64_t>(DivRound(sxy * 4096, sxx), -8192, 8192); }
+  void Add(int32_t luma_value, int64_t chroma_difference, int64_t luma_step) {
+    const int64_t y = std::clamp<int64_t>(luma_value, -1024, 1024);
+    const int64_t c = std::clamp<int64_t>(DivRound(chroma_difference * 256, luma_step), -(1 << 20), 1 << 20);
+    sxy += y * c;
+    sxx += y * y * 256;
+    while (sxx > (int64_t{1} << 40) || std::abs(sxy) > (int64_t{1} << 40)) sxy >>= 1, sxx >>= 1;
+  }
+};
+
+// How large a difference the neighbourhood's spread suggests, in steps: log2 buckets 0..8.
+inline int Activity(int64_t spread, int64_t step) {
+  const int64_t e = (spread << 8) / step;
+  return e == 0 ? 0 : std::clamp(static_cast<int>(std::bit_width(static_cast<uint64_t>(e))) - 5, 0, 8);
+}
+
+}  // namespace pointdag::hierarchical
