@@ -293,7 +293,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
                &models->zero_by_neighbours[c][act][near_nz],
                &models->zero_by_prediction[c][hctx][MagnitudeBucket(static_cast<uint64_t>(4 * std::abs(predicted[c][k]) / st))]
                                           [MagnitudeBucket(near_magnitude[c])]},
-              c, hctx);
+              c, hctx, local_ctx, act);
           YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
           int32_t v = 0;
           if constexpr (Side::kEncode) {

@@ -16,42 +16,57 @@
 
 namespace pointdag::hierarchical {
 
-// The zero flag is a logistic mix (entropy/logistic.h) of four models, with weights per channel
-// and height (0..3) learnt as it codes.
+// The zero flag is a logistic mix (entropy/logistic.h) of four models by two sets of weights, one
+// chosen by channel, height (0..3) and local count (0..2), one by channel and activity (0..8), each
+// learnt as it codes; the flag's logit is the mean of the two mixes'.
 class ZeroMixer {
  public:
   static constexpr int kInputs = 4;
   // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
-  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height) {
+  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height, int local, int activity) {
     models_ = models;
-    weights_ = &weights[c][height];
-    int64_t dot = 0;
-    for (int k = 0; k < kInputs; ++k) {
-      stretched_[k] = kStretch[4096 - models[k]->P0()];
-      dot += int64_t{(*weights_)[k]} * stretched_[k];
-    }
-    p_zero_ = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
-    return FixedP0{static_cast<uint32_t>(4096 - p_zero_)};
+    for (int k = 0; k < kInputs; ++k) stretched_[k] = kStretch[4096 - models[k]->P0()];
+    const int32_t d = (mixes_[0].Start(by_height_[c][height * 3 + local], stretched_) +
+                       mixes_[1].Start(by_activity_[c][activity], stretched_)) >> 1;
+    return FixedP0{static_cast<uint32_t>(4096 - kSquashTable[static_cast<size_t>(d + 2047)])};
   }
   void Update(int zero) {
-    const int32_t err = (zero << 12) - p_zero_;
-    for (int k = 0; k < kInputs; ++k) {
-      (*weights_)[k] = std::clamp((*weights_)[k] + ((stretched_[k] * err) >> 10), -(1 << 22), 1 << 22);
-      models_[k]->Update(zero);
-    }
+    for (Mix1& m : mixes_) m.Update(zero, stretched_);
+    for (YoungBitModel* m : models_) m->Update(zero);
   }
 
  private:
+  using Weights = std::array<int32_t, kInputs>;
+  // One set of weights in use: its logit d, and P(zero) = squash(d) to learn from.
+  struct Mix1 {
+    Weights* w = nullptr;
+    int32_t p_zero = 2048;
+    int32_t Start(Weights& weights, const std::array<int32_t, kInputs>& s) {
+      w = &weights;
+      int64_t dot = 0;
+      for (int k = 0; k < kInputs; ++k) dot += int64_t{weights[k]} * s[k];
+      const int32_t d = static_cast<int32_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047));
+      p_zero = kSquashTable[static_cast<size_t>(d + 2047)];
+      return d;
+    }
+    void Update(int zero, const std::array<int32_t, kInputs>& s) {
+      const int32_t err = (zero << 12) - p_zero;
+      for (int k = 0; k < kInputs; ++k) (*w)[k] = std::clamp((*w)[k] + ((s[k] * err) >> 10), -(1 << 22), 1 << 22);
+    }
+  };
   // Starting weights 0.4, 0.4, 0.3, 0.3 (in 1/65536): the mix starts a little above the models' mean.
-  std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> weights = [] {
-    std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> t{};
-    for (auto& channel : t) channel.fill({26214, 26214, 19661, 19661});
+  static constexpr Weights kStart = {26214, 26214, 19661, 19661};
+  template <size_t N>
+  static std::array<std::array<Weights, N>, 3> Fresh() {
+    std::array<std::array<Weights, N>, 3> t{};
+    for (auto& channel : t) channel.fill(kStart);
     return t;
-  }();
+  }
+  std::array<std::array<Weights, 12>, 3> by_height_ = Fresh<12>();
+  std::array<std::array<Weights, 9>, 3> by_activity_ = Fresh<9>();
+  std::array<Mix1, 2> mixes_{};
   std::array<YoungBitModel*, kInputs> models_{};
-  std::array<int32_t, kInputs>* weights_ = nullptr;
   std::array<int32_t, kInputs> stretched_{};
-  int32_t p_zero_ = 2048;
 };
 
 struct Models {
