@@ -21,6 +21,7 @@ using hierarchical::Activity;
 using hierarchical::Butterfly;
 using hierarchical::ChromaFit;
 using hierarchical::DivRound;
+using hierarchical::FlagContext;
 using hierarchical::MagnitudeBucket;
 using hierarchical::Models;
 using hierarchical::Octree;
@@ -28,8 +29,8 @@ using hierarchical::OctreeLevel;
 using hierarchical::Ycc;
 
 constexpr uint32_t kMaxMagnitude = uint32_t{1} << 24;
-constexpr double kRounding = 0.45;      // quantizer offset below 0.5: a dead zone around 0
-constexpr double kRdoLambda = 0.1;      // λ of the ±1 → 0 decision, in squared steps per bit
+constexpr double kRounding = 0.43;      // quantizer offset below 0.5: a dead zone around 0
+constexpr double kRdoLambda = 0.115;    // λ of the ±1 → 0 decision, in squared steps per bit
 constexpr int kMaxSearchEncodes = 6;  // the benchmark scans take 2-3; a flat curve's best passing step is kept
 
 // A node's 18 face and edge neighbours, as steps of −1/0/+1 along Morton bit positions 0, 1, 2.
@@ -142,11 +143,13 @@ class EncoderSide {
     return v;
   }
   // Dead-zone quantization, then ±1 → 0 where the bits saved outweigh the error added.
-  static int32_t Quantize(double residual, int64_t step, FixedP0 zero, const YoungBitModel& greater_one) {
+  // `greater_one`: the "> 1" flag's P0, asked for only where it matters.
+  template <typename GreaterOne>
+  static int32_t Quantize(double residual, int64_t step, FixedP0 zero, GreaterOne greater_one) {
     const double u = std::fabs(residual) / static_cast<double>(step);
     int32_t m = static_cast<int32_t>(std::min(std::floor(u + kRounding), static_cast<double>(kMaxMagnitude)));
     if (m == 1) {
-      const double p_nonzero = zero.P0() / 4096.0, p_one = greater_one.P0() / 4096.0;
+      const double p_nonzero = zero.P0() / 4096.0, p_one = greater_one().P0() / 4096.0;
       const double bits_zero = -std::log2(1 - p_nonzero);
       const double bits_one = -std::log2(p_nonzero) - std::log2(p_one) + 1;
       if (u * u + kRdoLambda * bits_zero < (u - 1) * (u - 1) + kRdoLambda * bits_one) m = 0;
@@ -287,24 +290,23 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           const int local_ctx = c == 0 ? std::min(local[0], 2) : (c == 1 ? luma_nz : std::min(luma_nz + 2 * (value[1][k] != 0), 2));
           const int64_t from_luma = c > 0 ? DivRound(fit[c].Alpha() * value[0][k] * step[k][0], 4096) : 0;
           const int act = Activity(hi[c] - lo[c], st);
-          const FixedP0 zero = models->zero_mixer.Mix(
-              {&models->zero[c][act][hctx][parent_nz][local_ctx],
-               &models->zero_by_stage[c][plan.butterfly[k].stage][std::min(height, 9)][parent_nz][local_ctx],
-               &models->zero_by_neighbours[c][act][near_nz],
-               &models->zero_by_prediction[c][hctx][MagnitudeBucket(static_cast<uint64_t>(4 * std::abs(predicted[c][k]) / st))]
-                                          [MagnitudeBucket(near_magnitude[c])]},
-              c, hctx, local_ctx, act);
-          YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
+          const FlagContext flag{c, act, hctx, std::min(height, 9), plan.butterfly[k].stage, parent_nz, local_ctx, near_nz,
+                                 MagnitudeBucket(static_cast<uint64_t>(4 * std::abs(predicted[c][k]) / st)),
+                                 MagnitudeBucket(near_magnitude[c])};
+          FixedP0 zero = models->zero.Mix(flag);
           int32_t v = 0;
           if constexpr (Side::kEncode) {
-            v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero, greater_one);
+            v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero,
+                                      [&] { return models->greater_one.Mix(flag); });
           }
-          FixedP0 coded_zero = zero;
-          const int is_zero = side.Bit(coded_zero, v == 0);
-          models->zero_mixer.Update(is_zero);
+          const int is_zero = side.Bit(zero, v == 0);
+          models->zero.Update(is_zero);
           if (!is_zero) {
             uint32_t magnitude = 1;
-            if (side.Bit(greater_one, std::abs(v) > 1)) {
+            FixedP0 greater_one = models->greater_one.Mix(flag);
+            const int big = side.Bit(greater_one, std::abs(v) > 1);
+            models->greater_one.Update(big);
+            if (big) {
               magnitude = 1 + side.Gamma(models->magnitude[c][act], static_cast<uint32_t>(std::abs(v) - 1));
               if (magnitude > kMaxMagnitude || magnitude < 2) return Corrupt("hierarchical colors: a coefficient is out of range");
             }

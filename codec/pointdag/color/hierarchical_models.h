@@ -1,6 +1,6 @@
-// The hierarchical colors' (hierarchical_colors.cc) adaptive models: the zero flag's logistic mix of
-// four context models, the other flags' and magnitudes' models, and chroma's fit to luma. Everything
-// here is integer arithmetic that a decoder repeats bit for bit (proto/PDAG_FORMAT.md §3).
+// The hierarchical colors' (hierarchical_colors.cc) adaptive models: the zero and "> 1" flags' logistic
+// mixes of four context models each, the magnitudes' and signs' models, and chroma's fit to luma.
+// Everything here is integer arithmetic that a decoder repeats bit for bit (proto/PDAG_FORMAT.md §3).
 #pragma once
 
 #include <algorithm>
@@ -16,13 +16,13 @@
 
 namespace pointdag::hierarchical {
 
-// The zero flag is a logistic mix (entropy/logistic.h) of four models by two sets of weights, one
-// chosen by channel, height (0..3) and local count (0..2), one by channel and activity (0..8), each
-// learnt as it codes; the flag's logit is the mean of the two mixes'.
-class ZeroMixer {
+// A flag's logistic mix (entropy/logistic.h) of four models by two sets of weights, one chosen by
+// channel, height (0..3) and local count (0..2), one by channel and activity (0..8), each learnt as
+// it codes; the flag's logit is the mean of the two mixes'.
+class FlagMixer {
  public:
   static constexpr int kInputs = 4;
-  // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
+  // P(0) in 1/4096 from the models' stretched probabilities; Update after the bit.
   FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height, int local, int activity) {
     models_ = models;
     for (int k = 0; k < kInputs; ++k) stretched_[k] = kStretch[4096 - models[k]->P0()];
@@ -69,25 +69,45 @@ class ZeroMixer {
   std::array<int32_t, kInputs> stretched_{};
 };
 
-struct Models {
-  // The zero flag's four models, all by channel and the parent's nonzero count (0..2) where listed:
-  //  - activity, height (0..3), parent's count, local count (0..2);
-  //  - butterfly stage (0..2), height (0..9), parent's count, local count;
-  //  - activity, the decoded face neighbours' nonzero values at this level (0, 1-2, 3+);
-  //  - height (0..3), the predicted difference in quarter steps and the decoded face neighbours'
-  //    magnitudes in this channel at this level (MagnitudeBucket both).
-  YoungBitModel zero[3][9][4][3][3];
-  YoungBitModel zero_by_stage[3][3][10][3][3];
-  YoungBitModel zero_by_neighbours[3][9][3];
-  YoungBitModel zero_by_prediction[3][4][5][5];
-  ZeroMixer zero_mixer;
-  YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
-  GammaModel magnitude[3][9];          // channel, activity
-  BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
-};
-
 // 0, 1, 2-3, 4-7, 8+: bit_width capped at 4.
 inline int MagnitudeBucket(uint64_t v) { return std::min(static_cast<int>(std::bit_width(v)), 4); }
+
+// What a coefficient's flags are coded with, all known to the decoder before them.
+struct FlagContext {
+  int c;                 // channel
+  int activity;          // 0..8
+  int height;            // 0..3
+  int height10;          // 0..9
+  int stage;             // the butterfly's, 0..2
+  int parent_nz;         // the parent's nonzero values in this channel, 0..2
+  int local;             // this node's earlier nonzero values, 0..2 (hierarchical_colors.cc)
+  int near_nz;           // the decoded face neighbours' nonzero values: 0, 1-2, 3+
+  int prediction;        // MagnitudeBucket of the predicted difference in quarter steps
+  int near_magnitude;    // MagnitudeBucket of the decoded face neighbours' Σ |value| in this channel
+};
+
+// The zero flag's and the "> 1" flag's models: each flag has its own four, mixed (FlagMixer).
+struct FlagModels {
+  YoungBitModel by_activity[3][9][4][3][3];  // channel, activity, height, parent's count, local count
+  YoungBitModel by_stage[3][3][10][3][3];    // channel, stage, height10, parent's count, local count
+  YoungBitModel by_neighbours[3][9][3];      // channel, activity, near_nz
+  YoungBitModel by_prediction[3][4][5][5];   // channel, height, prediction, near_magnitude
+  FlagMixer mixer;
+
+  FixedP0 Mix(const FlagContext& x) {
+    return mixer.Mix({&by_activity[x.c][x.activity][x.height][x.parent_nz][x.local],
+                      &by_stage[x.c][x.stage][x.height10][x.parent_nz][x.local], &by_neighbours[x.c][x.activity][x.near_nz],
+                      &by_prediction[x.c][x.height][x.prediction][x.near_magnitude]},
+                     x.c, x.height, x.local, x.activity);
+  }
+  void Update(int bit) { mixer.Update(bit); }
+};
+
+struct Models {
+  FlagModels zero, greater_one;
+  GammaModel magnitude[3][9];  // channel, activity
+  BitModel sign[3][3][3];      // channel, sign of the predicted difference, sign of luma's value
+};
 
 // Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
 struct ChromaFit {
