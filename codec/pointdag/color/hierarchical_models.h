@@ -16,46 +16,48 @@
 
 namespace pointdag::hierarchical {
 
-// A flag's logistic mix (entropy/logistic.h) of four models by two sets of weights, one chosen by
-// channel, height (0..3) and local count (0..2), one by channel and activity (0..8), each learnt as
-// it codes; the flag's logit is the mean of the two mixes'.
+// A flag's logistic mix (entropy/logistic.h) of four models and a bias by two sets of weights, one
+// chosen by channel, height (0..3) and local count (0..2), one by channel and activity (0..8), each
+// learnt as it codes; the flag's logit is the mean of the two mixes'.
 class FlagMixer {
  public:
-  static constexpr int kInputs = 4;
-  // P(0) in 1/4096 from the models' stretched probabilities; Update after the bit.
-  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height, int local, int activity) {
+  static constexpr int kModels = 4;
+  static constexpr int kInputs = kModels + 1;  // the last: a constant (a bias the weights learn)
+  // The bit's P0 in 1/4096 from the models' stretched probabilities; Update after the bit.
+  FixedP0 Mix(std::array<YoungBitModel*, kModels> models, int c, int height, int local, int activity) {
     models_ = models;
-    for (int k = 0; k < kInputs; ++k) stretched_[k] = kStretch[4096 - models[k]->P0()];
+    for (int k = 0; k < kModels; ++k) stretched_[k] = kStretch[4096 - models[k]->P0()];
     const int32_t d = (mixes_[0].Start(by_height_[c][height * 3 + local], stretched_) +
                        mixes_[1].Start(by_activity_[c][activity], stretched_)) >> 1;
     return FixedP0{static_cast<uint32_t>(4096 - kSquashTable[static_cast<size_t>(d + 2047)])};
   }
-  void Update(int zero) {
-    for (Mix1& m : mixes_) m.Update(zero, stretched_);
-    for (YoungBitModel* m : models_) m->Update(zero);
+  void Update(int bit) {
+    for (Mix1& m : mixes_) m.Update(bit, stretched_);
+    for (YoungBitModel* m : models_) m->Update(bit);
   }
 
  private:
   using Weights = std::array<int32_t, kInputs>;
-  // One set of weights in use: its logit d, and P(zero) = squash(d) to learn from.
+  // One set of weights in use: its logit d, and P(1) = squash(d) to learn from.
   struct Mix1 {
     Weights* w = nullptr;
-    int32_t p_zero = 2048;
+    int32_t p1 = 2048;  // P(1) in 1/4096
     int32_t Start(Weights& weights, const std::array<int32_t, kInputs>& s) {
       w = &weights;
       int64_t dot = 0;
       for (int k = 0; k < kInputs; ++k) dot += int64_t{weights[k]} * s[k];
       const int32_t d = static_cast<int32_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047));
-      p_zero = kSquashTable[static_cast<size_t>(d + 2047)];
+      p1 = kSquashTable[static_cast<size_t>(d + 2047)];
       return d;
     }
-    void Update(int zero, const std::array<int32_t, kInputs>& s) {
-      const int32_t err = (zero << 12) - p_zero;
+    void Update(int bit, const std::array<int32_t, kInputs>& s) {
+      const int32_t err = (bit << 12) - p1;
       for (int k = 0; k < kInputs; ++k) (*w)[k] = std::clamp((*w)[k] + ((s[k] * err) >> 10), -(1 << 22), 1 << 22);
     }
   };
-  // Starting weights 0.4, 0.4, 0.3, 0.3 (in 1/65536): the mix starts a little above the models' mean.
-  static constexpr Weights kStart = {26214, 26214, 19661, 19661};
+  // Starting weights 0.4, 0.4, 0.3, 0.3 (in 1/65536): the mix starts a little above the models' mean;
+  // the bias's 0.
+  static constexpr Weights kStart = {26214, 26214, 19661, 19661, 0};
   template <size_t N>
   static std::array<std::array<Weights, N>, 3> Fresh() {
     std::array<std::array<Weights, N>, 3> t{};
@@ -65,8 +67,8 @@ class FlagMixer {
   std::array<std::array<Weights, 12>, 3> by_height_ = Fresh<12>();
   std::array<std::array<Weights, 9>, 3> by_activity_ = Fresh<9>();
   std::array<Mix1, 2> mixes_{};
-  std::array<YoungBitModel*, kInputs> models_{};
-  std::array<int32_t, kInputs> stretched_{};
+  std::array<YoungBitModel*, kModels> models_{};
+  std::array<int32_t, kInputs> stretched_ = {0, 0, 0, 0, 256};  // the bias: one nat (256/256)
 };
 
 // 0, 1, 2-3, 4-7, 8+: bit_width capped at 4.
