@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <random>
-#include <set>
 
 #include "pointdag/color/color_codec.h"
 #include "pointdag/color/hierarchical_colors.h"
@@ -15,18 +14,6 @@
 
 namespace pointdag {
 namespace {
-
-// Sorted unique codes on a sheet, with the grid's extreme corners (depth 21: every Morton bit).
-std::vector<uint64_t> SheetMorton(size_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  constexpr uint32_t kMax = (1u << kMaxDepth) - 1;
-  std::set<uint64_t> codes = {MortonEncode(0, 0, 0), MortonEncode(kMax, kMax, kMax), MortonEncode(kMax, 0, 1)};
-  while (codes.size() < n) {
-    const uint32_t x = rng() % 64, y = rng() % 64;
-    codes.insert(MortonEncode(x, y, (x + y) / 8));
-  }
-  return {codes.begin(), codes.end()};
-}
 
 // Smooth colors with noise: what a scan's surfaces look like to the coder.
 std::vector<Rgb8> ShadedColors(const std::vector<uint64_t>& morton, uint32_t seed) {
@@ -59,7 +46,7 @@ TEST(HierarchicalColors, DecoderReproducesTheEncoderOnEdgeCases) {
   for (int step : {1, 16, 200, 4000}) {
     ExpectDecoderMatchesEncoder(ShadedColors(dense, 1), dense, {static_cast<uint16_t>(step), static_cast<uint16_t>(step + step / 2)});
   }
-  const auto sheet = SheetMorton(3000, 2);
+  const auto sheet = testing::SheetMorton(3000, 2);
   ExpectDecoderMatchesEncoder(ShadedColors(sheet, 3), sheet, {40, 60});
 }
 
