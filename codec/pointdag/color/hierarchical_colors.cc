@@ -205,6 +205,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       }
       std::array<std::array<int32_t, 7>, 3> value{};
       std::array<int, 3> local = {0, 0, 0}, magnitudes = {0, 0, 0};
+      int32_t last_luma = 0;  // the node's last nonzero luma value so far
       for (int k = plan.count - 1; k >= 0; --k) {
         for (int c = 0; c < 3; ++c) {
           const int64_t st = step[k][c == 0 ? 0 : 1];
@@ -235,7 +236,10 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
             }
             const int64_t p = predicted[c][k];
             const int predicted_sign = 4 * std::abs(p) < st ? 0 : (p > 0 ? 1 : 2);
-            const int luma_sign = c == 0 ? 0 : (value[0][k] > 0 ? 1 : (value[0][k] < 0 ? 2 : 0));
+            // Luma's sign by the node's previous nonzero luma value's (a missed edge tilts them alike),
+            // chroma's by this butterfly's luma value's.
+            const int32_t reference = c == 0 ? last_luma : value[0][k];
+            const int luma_sign = reference > 0 ? 1 : (reference < 0 ? 2 : 0);
             const bool negative = side.Bit(models->sign[c][predicted_sign][luma_sign], v < 0);
             v = negative ? -static_cast<int32_t>(magnitude) : static_cast<int32_t>(magnitude);
           } else {
@@ -247,6 +251,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           const int64_t coded = from_luma + int64_t{v} * st;
           decoded[c][k] = std::clamp(predicted[c][k] + coded, -hierarchical::kDifferenceLimit, hierarchical::kDifferenceLimit);
           if (c > 0 && value[0][k] != 0) fit[c].Add(value[0][k], coded, step[k][0]);
+          if (c == 0 && v != 0) last_luma = v;
         }
       }
       const uint8_t packed = static_cast<uint8_t>(std::min(local[0], 2) | std::min(local[1], 2) << 2 | std::min(local[2], 2) << 4);

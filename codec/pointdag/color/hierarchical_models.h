@@ -108,7 +108,7 @@ struct FlagModels {
 struct Models {
   FlagModels zero, greater_one;
   GammaModel magnitude[3][9];  // channel, activity
-  BitModel sign[3][3][3];      // channel, sign of the predicted difference, sign of luma's value
+  BitModel sign[3][3][3];      // channel, sign of the predicted difference, of a luma value (hierarchical_colors.cc)
 };
 
 // Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
