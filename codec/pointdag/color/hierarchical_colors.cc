@@ -8,184 +8,40 @@
 #include <optional>
 #include <type_traits>
 
+#include "pointdag/color/hierarchical_models.h"
+#include "pointdag/color/hierarchical_neighbours.h"
 #include "pointdag/color/hierarchical_octree.h"
 #include "pointdag/entropy/adaptive_codes.h"
 #include "pointdag/entropy/binary_range_coder.h"
-#include "pointdag/entropy/logistic.h"
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
 namespace {
 
+using hierarchical::Activity;
 using hierarchical::Butterfly;
+using hierarchical::ChromaFit;
 using hierarchical::DivRound;
+using hierarchical::FlagContext;
+using hierarchical::kChildSide;
+using hierarchical::kEarlierCells;
+using hierarchical::kOffsets;
+using hierarchical::kParentSide;
+using hierarchical::kParentSideCells;
+using hierarchical::kParentWeight;
+using hierarchical::MagnitudeBucket;
+using hierarchical::Models;
 using hierarchical::Octree;
 using hierarchical::OctreeLevel;
+using hierarchical::Offset;
+using hierarchical::OffsetIndex;
+using hierarchical::Predictor;
 using hierarchical::Ycc;
 
 constexpr uint32_t kMaxMagnitude = uint32_t{1} << 24;
-constexpr double kRounding = 0.45;      // quantizer offset below 0.5: a dead zone around 0
-constexpr double kRdoLambda = 0.1;      // λ of the ±1 → 0 decision, in squared steps per bit
-constexpr double kChromaStepRatio = 1.5;
+constexpr double kRounding = 0.43;      // quantizer offset below 0.5: a dead zone around 0
+constexpr double kRdoLambda = 0.115;    // λ of the ±1 → 0 decision, in squared steps per bit
 constexpr int kMaxSearchEncodes = 6;  // the benchmark scans take 2-3; a flat curve's best passing step is kept
-
-// A node's 18 face and edge neighbours, as steps of −1/0/+1 along Morton bit positions 0, 1, 2.
-struct Offset {
-  std::array<int8_t, 3> d;
-  int nonzero;
-};
-constexpr int OffsetIndex(int d0, int d1, int d2) { return (d0 + 1) + 3 * (d1 + 1) + 9 * (d2 + 1); }
-constexpr auto kOffsets = [] {
-  std::array<Offset, 18> t{};
-  int n = 0;
-  for (int d2 = -1; d2 <= 1; ++d2) {
-    for (int d1 = -1; d1 <= 1; ++d1) {
-      for (int d0 = -1; d0 <= 1; ++d0) {
-        const int nonzero = (d0 != 0) + (d1 != 0) + (d2 != 0);
-        if (nonzero == 1 || nonzero == 2) {
-          t[n++] = {{static_cast<int8_t>(d0), static_cast<int8_t>(d1), static_cast<int8_t>(d2)}, nonzero};
-        }
-      }
-    }
-  }
-  return t;
-}();
-
-// Prediction weights: the parent 8; the parent's face (2) and edge (1) neighbours on the child's
-// side; the child's own face (2) and edge (1) neighbours already decoded (in earlier parents).
-constexpr int64_t kParentWeight = 8;
-
-// A predictor of the child in slot s: the parent-level cell `up` (index into the 27 around the
-// parent), at the children's level its child in `slot`, and the weight.
-struct Predictor {
-  uint8_t up, slot;
-  int8_t weight;
-};
-// Per slot: the parent's 6 neighbours on the child's side (3 faces, 3 edges).
-constexpr auto kParentSide = [] {
-  std::array<std::array<Predictor, 6>, 8> t{};
-  for (int s = 0; s < 8; ++s) {
-    int n = 0;
-    for (const Offset& o : kOffsets) {
-      bool toward = true;
-      for (int a = 0; a < 3; ++a) toward = toward && (o.d[a] == 0 || o.d[a] == (((s >> a) & 1) ? 1 : -1));
-      if (toward) t[s][n++] = {static_cast<uint8_t>(OffsetIndex(o.d[0], o.d[1], o.d[2])), 0, static_cast<int8_t>(o.nonzero == 1 ? 2 : 1)};
-    }
-  }
-  return t;
-}();
-// Per slot: the child's 12 face and edge neighbours outside its parent (the 6 inside are siblings,
-// decoded with it).
-constexpr auto kChildSide = [] {
-  std::array<std::array<Predictor, 12>, 8> t{};
-  for (int s = 0; s < 8; ++s) {
-    int n = 0;
-    for (const Offset& o : kOffsets) {
-      std::array<int, 3> inner{}, up{};
-      for (int a = 0; a < 3; ++a) {
-        const int v = ((s >> a) & 1) + o.d[a];
-        up[a] = v < 0 ? -1 : (v > 1 ? 1 : 0);
-        inner[a] = v & 1;
-      }
-      if (up[0] == 0 && up[1] == 0 && up[2] == 0) continue;
-      t[s][n++] = {static_cast<uint8_t>(OffsetIndex(up[0], up[1], up[2])), static_cast<uint8_t>(inner[0] | inner[1] << 1 | inner[2] << 2),
-                   static_cast<int8_t>(o.nonzero == 1 ? 2 : 1)};
-    }
-  }
-  return t;
-}();
-
-// The zero flag is a logistic mix (entropy/logistic.h) of three models, with weights per channel
-// and height (0..3) learnt as it codes.
-class ZeroMixer {
- public:
-  static constexpr int kInputs = 3;
-  // P(zero) in 1/4096 from the models' stretched probabilities; Update after the bit.
-  FixedP0 Mix(std::array<YoungBitModel*, kInputs> models, int c, int height) {
-    models_ = models;
-    weights_ = &weights[c][height];
-    int64_t dot = 0;
-    for (int k = 0; k < kInputs; ++k) {
-      stretched_[k] = kStretch[4096 - models[k]->P0()];
-      dot += int64_t{(*weights_)[k]} * stretched_[k];
-    }
-    p_zero_ = kSquashTable[static_cast<size_t>(std::clamp<int64_t>(dot >> 16, -2047, 2047) + 2047)];
-    return FixedP0{static_cast<uint32_t>(4096 - p_zero_)};
-  }
-  void Update(int zero) {
-    const int32_t err = (zero << 12) - p_zero_;
-    for (int k = 0; k < kInputs; ++k) {
-      (*weights_)[k] = std::clamp((*weights_)[k] + ((stretched_[k] * err) >> 10), -(1 << 22), 1 << 22);
-      models_[k]->Update(zero);
-    }
-  }
-
- private:
-  // Starting weights 0.4, 0.4, 0.3 (in 1/65536): the mix starts near the models' mean.
-  std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> weights = [] {
-    std::array<std::array<std::array<int32_t, kInputs>, 4>, 3> t{};
-    for (auto& channel : t) channel.fill({26214, 26214, 19661});
-    return t;
-  }();
-  std::array<YoungBitModel*, kInputs> models_{};
-  std::array<int32_t, kInputs>* weights_ = nullptr;
-  std::array<int32_t, kInputs> stretched_{};
-  int32_t p_zero_ = 2048;
-};
-
-// Which of the 27 cells around a node a child in slot s reads (bit OffsetIndex): its parent side at
-// any position in the level's order, and (with the face neighbours' nonzero counts) cells that must
-// come before the node: the only ones looked up.
-constexpr auto kParentSideCells = [] {
-  std::array<uint32_t, 8> t{};
-  for (int s = 0; s < 8; ++s) {
-    for (const Predictor& p : kParentSide[s]) t[s] |= 1u << p.up;
-  }
-  return t;
-}();
-constexpr auto kEarlierCells = [] {
-  std::array<uint32_t, 8> t{};
-  for (int s = 0; s < 8; ++s) {
-    for (const Predictor& p : kChildSide[s]) t[s] |= 1u << p.up;
-    for (const Offset& o : kOffsets) {
-      if (o.nonzero == 1) t[s] |= 1u << OffsetIndex(o.d[0], o.d[1], o.d[2]);
-    }
-  }
-  return t;
-}();
-
-struct Models {
-  // The zero flag's three models, all by channel and the parent's nonzero count (0..2) where listed:
-  //  - activity, height (0..3), parent's count, local count (0..2);
-  //  - butterfly stage (0..2), height (0..9), parent's count, local count;
-  //  - activity, the decoded face neighbours' nonzero values at this level (0, 1-2, 3+).
-  YoungBitModel zero[3][9][4][3][3];
-  YoungBitModel zero_by_stage[3][3][10][3][3];
-  YoungBitModel zero_by_neighbours[3][9][3];
-  ZeroMixer zero_mixer;
-  YoungBitModel greater_one[3][9][3];  // channel, activity, parent's nonzero count
-  GammaModel magnitude[3][4];          // channel, height / 3
-  BitModel sign[3][3][3];              // channel, sign of the predicted difference, sign of luma's value
-};
-
-// Chroma's value predicted from luma's at the same butterfly: a running least-squares slope.
-struct ChromaFit {
-  int64_t sxy = 0, sxx = 0;
-  int64_t Alpha() const { return sxx == 0 ? 0 : std::clamp<int64_t>(DivRound(sxy * 4096, sxx), -8192, 8192); }
-  void Add(int32_t luma_value, int64_t chroma_difference, int64_t luma_step) {
-    const int64_t y = std::clamp<int64_t>(luma_value, -1024, 1024);
-    const int64_t c = std::clamp<int64_t>(DivRound(chroma_difference * 256, luma_step), -(1 << 20), 1 << 20);
-    sxy += y * c;
-    sxx += y * y * 256;
-    while (sxx > (int64_t{1} << 40) || std::abs(sxy) > (int64_t{1} << 40)) sxy >>= 1, sxx >>= 1;
-  }
-};
-
-// How large a difference the neighbourhood's spread suggests, in steps: log2 buckets 0..8.
-int Activity(int64_t spread, int64_t step) {
-  const int64_t e = (spread << 8) / step;
-  return e == 0 ? 0 : std::clamp(static_cast<int>(std::bit_width(static_cast<uint64_t>(e))) - 5, 0, 8);
-}
 
 struct Header {
   uint64_t count = 0;
@@ -210,11 +66,13 @@ class EncoderSide {
     return v;
   }
   // Dead-zone quantization, then ±1 → 0 where the bits saved outweigh the error added.
-  static int32_t Quantize(double residual, int64_t step, FixedP0 zero, const YoungBitModel& greater_one) {
+  // `greater_one`: the "> 1" flag's P0, asked for only where it matters.
+  template <typename GreaterOne>
+  static int32_t Quantize(double residual, int64_t step, FixedP0 zero, GreaterOne greater_one) {
     const double u = std::fabs(residual) / static_cast<double>(step);
     int32_t m = static_cast<int32_t>(std::min(std::floor(u + kRounding), static_cast<double>(kMaxMagnitude)));
     if (m == 1) {
-      const double p_nonzero = zero.P0() / 4096.0, p_one = greater_one.P0() / 4096.0;
+      const double p_nonzero = zero.P0() / 4096.0, p_one = greater_one().P0() / 4096.0;
       const double bits_zero = -std::log2(1 - p_nonzero);
       const double bits_one = -std::log2(p_nonzero) - std::log2(p_one) + 1;
       if (u * u + kRdoLambda * bits_zero < (u - 1) * (u - 1) + kRdoLambda * bits_one) m = 0;
@@ -250,11 +108,12 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
     const int height = tree.depth - 1 - l;
     const int64_t luma_step = hierarchical::LevelStep(header.steps.luma, height);
     const int64_t chroma_step = hierarchical::LevelStep(header.steps.chroma, height);
-    const int hctx = std::min(height, 3), mctx = std::min(height / 3, 3);
+    const int hctx = std::min(height, 3);
     child_rec.assign(children.code.size(), Ycc{});
     child_nz.assign(children.code.size(), 0);
     const hierarchical::LevelIndex index(nodes.code);
     std::vector<uint8_t> own_nz(nodes.code.size(), 0);  // per node: its nonzero values, all channels
+    std::vector<std::array<uint8_t, 3>> own_magnitude(nodes.code.size());  // per node and channel: Σ |value|, capped at 255
     for (size_t i = 0; i < nodes.code.size(); ++i) {
       const uint32_t first = nodes.first_child[i], end = nodes.first_child[i + 1];
       if (end - first == 1) {  // a lone child: the parent's mean, nothing coded
@@ -279,9 +138,13 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
         if (inside && (cell < nodes.code[i] || ((any_order >> x) & 1))) neighbour[x] = index.Find(cell);
       }
       int near_nz = 0;  // the decoded face neighbours' nonzero values: 0, 1-2, 3+
+      std::array<uint32_t, 3> near_magnitude = {0, 0, 0};  // and their Σ |value| per channel
       for (const Offset& o : kOffsets) {
         const int64_t n = neighbour[OffsetIndex(o.d[0], o.d[1], o.d[2])];
-        if (o.nonzero == 1 && n >= 0 && n < static_cast<int64_t>(i)) near_nz += own_nz[n];
+        if (o.nonzero == 1 && n >= 0 && n < static_cast<int64_t>(i)) {
+          near_nz += own_nz[n];
+          for (int c = 0; c < 3; ++c) near_magnitude[c] += own_magnitude[n][c];
+        }
       }
       near_nz = near_nz == 0 ? 0 : (near_nz <= 2 ? 1 : 2);
       std::array<int64_t, 3> lo, hi;
@@ -341,7 +204,8 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
                    hierarchical::DifferenceStep(chroma_step, bf.wa, bf.wb)};
       }
       std::array<std::array<int32_t, 7>, 3> value{};
-      std::array<int, 3> local = {0, 0, 0};
+      std::array<int, 3> local = {0, 0, 0}, magnitudes = {0, 0, 0};
+      int32_t last_luma = 0;  // the node's last nonzero luma value so far
       for (int k = plan.count - 1; k >= 0; --k) {
         for (int c = 0; c < 3; ++c) {
           const int64_t st = step[k][c == 0 ? 0 : 1];
@@ -350,28 +214,32 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           const int local_ctx = c == 0 ? std::min(local[0], 2) : (c == 1 ? luma_nz : std::min(luma_nz + 2 * (value[1][k] != 0), 2));
           const int64_t from_luma = c > 0 ? DivRound(fit[c].Alpha() * value[0][k] * step[k][0], 4096) : 0;
           const int act = Activity(hi[c] - lo[c], st);
-          const FixedP0 zero = models->zero_mixer.Mix(
-              {&models->zero[c][act][hctx][parent_nz][local_ctx],
-               &models->zero_by_stage[c][plan.butterfly[k].stage][std::min(height, 9)][parent_nz][local_ctx],
-               &models->zero_by_neighbours[c][act][near_nz]},
-              c, hctx);
-          YoungBitModel& greater_one = models->greater_one[c][act][parent_nz];
+          const FlagContext flag{c, act, hctx, std::min(height, 9), plan.butterfly[k].stage, parent_nz, local_ctx, near_nz,
+                                 MagnitudeBucket(static_cast<uint64_t>(4 * std::abs(predicted[c][k]) / st)),
+                                 MagnitudeBucket(near_magnitude[c])};
+          FixedP0 zero = models->zero.Mix(flag);
           int32_t v = 0;
           if constexpr (Side::kEncode) {
-            v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero, greater_one);
+            v = EncoderSide::Quantize(truth[c][k] - static_cast<double>(predicted[c][k] + from_luma), st, zero,
+                                      [&] { return models->greater_one.Mix(flag); });
           }
-          FixedP0 coded_zero = zero;
-          const int is_zero = side.Bit(coded_zero, v == 0);
-          models->zero_mixer.Update(is_zero);
+          const int is_zero = side.Bit(zero, v == 0);
+          models->zero.Update(is_zero);
           if (!is_zero) {
             uint32_t magnitude = 1;
-            if (side.Bit(greater_one, std::abs(v) > 1)) {
-              magnitude = 1 + side.Gamma(models->magnitude[c][mctx], static_cast<uint32_t>(std::abs(v) - 1));
+            FixedP0 greater_one = models->greater_one.Mix(flag);
+            const int big = side.Bit(greater_one, std::abs(v) > 1);
+            models->greater_one.Update(big);
+            if (big) {
+              magnitude = 1 + side.Gamma(models->magnitude[c][act], static_cast<uint32_t>(std::abs(v) - 1));
               if (magnitude > kMaxMagnitude || magnitude < 2) return Corrupt("hierarchical colors: a coefficient is out of range");
             }
             const int64_t p = predicted[c][k];
             const int predicted_sign = 4 * std::abs(p) < st ? 0 : (p > 0 ? 1 : 2);
-            const int luma_sign = c == 0 ? 0 : (value[0][k] > 0 ? 1 : (value[0][k] < 0 ? 2 : 0));
+            // Luma's sign by the node's previous nonzero luma value's (a missed edge tilts them alike),
+            // chroma's by this butterfly's luma value's.
+            const int32_t reference = c == 0 ? last_luma : value[0][k];
+            const int luma_sign = reference > 0 ? 1 : (reference < 0 ? 2 : 0);
             const bool negative = side.Bit(models->sign[c][predicted_sign][luma_sign], v < 0);
             v = negative ? -static_cast<int32_t>(magnitude) : static_cast<int32_t>(magnitude);
           } else {
@@ -379,9 +247,11 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
           }
           value[c][k] = v;
           local[c] += v != 0;
+          magnitudes[c] += std::abs(v);
           const int64_t coded = from_luma + int64_t{v} * st;
           decoded[c][k] = std::clamp(predicted[c][k] + coded, -hierarchical::kDifferenceLimit, hierarchical::kDifferenceLimit);
           if (c > 0 && value[0][k] != 0) fit[c].Add(value[0][k], coded, step[k][0]);
+          if (c == 0 && v != 0) last_luma = v;
         }
       }
       const uint8_t packed = static_cast<uint8_t>(std::min(local[0], 2) | std::min(local[1], 2) << 2 | std::min(local[2], 2) << 4);
@@ -392,6 +262,7 @@ StatusOr<std::vector<Ycc>> CodeLevels(const Octree& tree, const Header& header, 
       }
       for (uint32_t j = first; j < end; ++j) child_nz[j] = packed;
       own_nz[i] = static_cast<uint8_t>(local[0] + local[1] + local[2]);
+      for (int c = 0; c < 3; ++c) own_magnitude[i][c] = static_cast<uint8_t>(std::min(magnitudes[c], 255));
     }
     rec.swap(child_rec);
     nz.swap(child_nz);
@@ -464,9 +335,14 @@ class HierarchicalEncoder {
   std::vector<std::vector<std::array<double, 3>>> sums_;
 };
 
-HierarchicalSteps StepsFor(double luma16) {
+// Chroma's step over luma's: PSNR-Y ignores chroma, so coarser chroma is free bits, up to where
+// PSNR-RGB would fall below VBR's at the same PSNR-Y (docs/benchmarks.md): 1.5 up to 36 dB, rising
+// to 2 at 42 dB, where the scans' PSNR-RGB has more room.
+double ChromaStepRatio(double target_psnr_y) { return std::clamp(1.5 + (target_psnr_y - 36) / 12, 1.5, 2.0); }
+
+HierarchicalSteps StepsFor(double luma16, double chroma_ratio) {
   const auto to16 = [](double v) { return static_cast<uint16_t>(std::clamp(std::lround(v), 1L, 65535L)); };
-  return {to16(luma16), to16(luma16 * kChromaStepRatio)};
+  return {to16(luma16), to16(luma16 * chroma_ratio)};
 }
 
 }  // namespace
@@ -492,7 +368,7 @@ StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const R
   int encodes = 0;
   double last_step = 0, last_margin = 0;
   for (int round = 0; round < kMaxSearchEncodes; ++round) {
-    const HierarchicalSteps steps = StepsFor(step);
+    const HierarchicalSteps steps = StepsFor(step, ChromaStepRatio(target_psnr_y));
     ASSIGN_OR_RETURN(HierarchicalColors trial, encoder.Encode(steps));
     ++encodes;
     const double margin = MeasureColorPsnr(colors, trial.decoded).y - target_psnr_y;

@@ -39,9 +39,9 @@ struct HierarchicalColors {
 StatusOr<HierarchicalColors> EncodeHierarchicalColors(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
                                                       HierarchicalSteps steps);
 
-// The largest steps whose decoded colors reach `target_psnr_y` (chroma step = 1.5 × luma's), found
-// by a secant search on log(step): a handful of encodes. `start`: a luma step (1/16) expected near
-// the answer, 0 to predict one. kInvalidArgument when even the finest step misses the target.
+// The largest steps whose decoded colors reach `target_psnr_y` (chroma step 1.5 × luma's up to 36
+// dB, rising to 2 × at 42 dB), found by a secant search on log(step): a handful of encodes.
+// `start`: a luma step (1/16) expected near the answer, 0 to predict one. kInvalidArgument when even the finest step misses the target.
 StatusOr<HierarchicalColors> EncodeHierarchicalColorsForTarget(std::span<const Rgb8> colors,
                                                                std::span<const uint64_t> morton, double target_psnr_y,
                                                                uint32_t start = 0);
