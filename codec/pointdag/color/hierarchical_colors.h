@@ -5,11 +5,12 @@
 // decoded neighbours' at the parent's and the children's level, as G-PCC's RAHT predicts. The
 // differences are quantized with a dead zone (and zeroed where that saves more bits than it costs
 // error), chroma's predicted from luma's by a running least-squares fit, and range coded with
-// contexts from the neighbourhood's spread and the parent's nonzero coefficients.
+// flags mixed from context models (hierarchical_models.h) of the neighbourhood's spread, the
+// parent's and the neighbours' coded values.
 //
 // Not random access: a color depends on its neighbourhood's decoded colors, so the section decodes
-// whole (DecodeColors), as the lossless colors do. At 34 dB it takes 7–39 % fewer bits than VBR on
-// the benchmark scans (docs/benchmarks.md); VBR keeps the random-access contract for everything else.
+// whole (DecodeColors), as the lossless colors do. At 34 dB it takes 11–44 % fewer bits than VBR on
+// the benchmark scans, 5–24 % at 38 dB (docs/benchmarks.md); VBR keeps the random-access contract.
 #pragma once
 
 #include <cstdint>
