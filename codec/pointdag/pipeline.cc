@@ -61,8 +61,7 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
   nlohmann::json color = {{"codec", grid.has_color() ? ColorCodecName(colors.codec) : "none"}};
   if (grid.has_color()) {
     color["target_psnr_y"] = color_options.target_psnr_y ? nlohmann::json(*color_options.target_psnr_y) : nlohmann::json();
-    const bool lossy = colors.codec == ColorCodec::kFixedRate || colors.codec == ColorCodec::kVariableRate;
-    if (lossy) {
+    if (IsLossy(colors.codec)) {
       color["max_mse"] = colors.max_mse;
       color["blocks"] = colors.blocks;
       color["psnr_y"] = colors.psnr.y;

@@ -2,6 +2,7 @@
 #include <sys/wait.h>
 
 #include <nlohmann/json.hpp>
+#include <map>
 #include <set>
 
 #include "hostile_pdag.h"
@@ -102,6 +103,31 @@ TEST(Cli, QualityFlagStoresLossyColorsThatMeetTheTarget) {
                 "--quality 30 --color-codec lossless", dir).exit_code, 2);
   EXPECT_EQ(Cli("encode " + (DataDir() / "tiny_1.2-with-color_1065pts.las").string() + " -o x.pdag --depth 6 "
                 "--quality 30 --lossless", dir).exit_code, 2);
+}
+
+// The hierarchical colors from the CLI: the same target in fewer bytes than VBR's, a file that
+// decodes, and mipmap mode (whose node colors they cannot code) refused as bad input with a reason.
+TEST(Cli, HierarchicalColorsMeetTheTargetInFewerBytesThanVbr) {
+  SKIP_WITHOUT_DATA();
+  ScratchDir dir;
+  const auto scan = (DataDir() / "autzen_trim_pdrf3_rgb.las").string();
+  std::map<std::string, nlohmann::json> info;
+  for (const std::string codec : {"vbr", "hierarchical"}) {
+    const auto pdag = (dir / (codec + ".pdag")).string();
+    const CliRun encode = Cli("encode " + scan + " -o " + pdag + " --voxel 4 --quality 34 --color-codec " + codec, dir);
+    ASSERT_EQ(encode.exit_code, 0) << encode.err;
+    info[codec] = nlohmann::json::parse(Cli("info " + pdag + " --json", dir).out);
+    EXPECT_EQ(info[codec]["meta"]["codec"]["colors"]["codec"], codec);
+    EXPECT_GE(info[codec]["meta"]["codec"]["colors"]["psnr_y"].get<double>(), 34.0) << codec;
+    EXPECT_EQ(Cli("decode " + pdag + " -o " + (dir / (codec + ".ply")).string(), dir).exit_code, 0) << codec;
+  }
+  EXPECT_LT(info["hierarchical"]["sections"]["colors"].get<int>(), info["vbr"]["sections"]["colors"].get<int>() * 3 / 4);
+  const CliRun mipmap = Cli("encode " + scan + " -o " + (dir / "m.pdag").string() +
+                                " --voxel 4 --quality 34 --color-codec hierarchical --mipmap",
+                            dir);
+  EXPECT_EQ(mipmap.exit_code, 1);
+  EXPECT_NE(mipmap.err.find("leaf mode"), std::string::npos) << mipmap.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.pdag")) << "no half-written file";
 }
 
 TEST(Cli, ExitCodesAreOneForBadInputAndTwoForUsage) {
