@@ -478,9 +478,7 @@ TEST(ColorCodec, PipelineStoresAndDecodesLossyColors) {
 // deliberate: update the number in the same commit that explains it.
 TEST(ColorCodec, CompressedSizesAreStable) {
   SKIP_WITHOUT_DATA();
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  auto scan = EncodeScan(testing::DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  auto scan = testing::EncodeAutzenAt4Feet();
   ASSERT_TRUE(scan.ok());
   const ColorEncodeOptions vbr{ColorCodec::kVariableRate, std::nullopt, 16.0};
   const ColorEncodeOptions fixed{ColorCodec::kFixedRate, std::nullopt, 16.0};

@@ -209,9 +209,7 @@ INSTANTIATE_TEST_SUITE_P(SharedData, HierarchicalScanTest, ::testing::ValuesIn(k
 // must be deliberate: update the numbers in the same commit that explains it.
 TEST(HierarchicalColors, CompressedSizesAreStable) {
   SKIP_WITHOUT_DATA();
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  auto scan = EncodeScan(testing::DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+  auto scan = testing::EncodeAutzenAt4Feet();
   ASSERT_TRUE(scan.ok());
   auto fixed = EncodeHierarchicalColors(scan->grid.colors, scan->grid.morton, {320, 480});
   ASSERT_TRUE(fixed.ok());

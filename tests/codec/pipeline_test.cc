@@ -9,6 +9,7 @@ namespace pointdag {
 namespace {
 
 using testing::DataDir;
+using testing::EncodeAutzenAt4Feet;
 
 using testing::ScanAtVoxel;
 
@@ -58,13 +59,6 @@ TEST_P(PipelineTest, ChunkedBuildsEqualTheOneGoBuild) {
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedData, PipelineTest, ::testing::ValuesIn(testing::kEveryScan), testing::ScanFileName());
-
-// Autzen at 4 ft, the fixed case of the metadata and size regression tests.
-StatusOr<EncodedScan> EncodeAutzenAt4Feet() {
-  EncodeOptions options;
-  options.voxel_size = 4.0;
-  return EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
-}
 
 // Mipmap mode at a target: the voxels' own colors meet it (decoded from the file), and the
 // reported PSNR is theirs, not that of every node's color.

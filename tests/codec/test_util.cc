@@ -6,9 +6,16 @@
 #include <cmath>
 #include <cstdio>
 
+#include "pointdag/pipeline.h"
 #include "pointdag/voxelize/morton.h"
 
 namespace pointdag::testing {
+
+StatusOr<EncodedScan> EncodeAutzenAt4Feet() {
+  EncodeOptions options;
+  options.voxel_size = 4.0;
+  return EncodeScan(DataDir() / "autzen_trim_pdrf3_rgb.las", options);
+}
 
 CliRun Cli(const std::string& args, const ScratchDir& dir, const std::string& env) {
   const auto err_path = dir / "stderr.txt";

@@ -16,9 +16,18 @@
 #include <vector>
 
 #include "pointdag/read/byte_io.h"
+#include "pointdag/status.h"
 #include "pointdag/voxelize/morton.h"
 
+namespace pointdag {
+struct EncodedScan;  // pointdag/pipeline.h, which tests of the encoder include themselves
+}  // namespace pointdag
+
 namespace pointdag::testing {
+
+// Autzen at 4 ft (36,931 voxels, lossless colors): the fixed case of the metadata and size
+// regression tests.
+StatusOr<EncodedScan> EncodeAutzenAt4Feet();
 
 // ../shared/data beside the checkout (POINTDAG_DATA_DIR overrides).
 inline std::filesystem::path DataDir() {
