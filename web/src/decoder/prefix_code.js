@@ -5,27 +5,30 @@ import { corrupt } from './pdag_error.js';
 export const PREFIX_CODE_BITS = 12;
 const PEEK_MASK = (1 << PREFIX_CODE_BITS) - 1;
 
-// The canonical code of `lengths` (256 entries, 0 = absent) as a lookup table of
-// PREFIX_CODE_BITS-bit patterns: entry = symbol | length << 8, 0 where no code starts.
+// The canonical code of `lengths` (256 entries, 0 = absent) as a lookup table of `bits`-bit
+// patterns, `bits` the longest code: entry = symbol | length << 8, 0 where no code starts. Sized by
+// the longest code, so that a small tile's short codes fill a few hundred entries, not 4096.
 export function buildPrefixTable(lengths) {
   let kraft = 0;
+  let bits = 0;
   for (let s = 0; s < 256; ++s) {
     if (lengths[s] > PREFIX_CODE_BITS) throw corrupt(`prefix code length ${lengths[s]} exceeds 12`);
     if (lengths[s] > 0) kraft += 1 << (PREFIX_CODE_BITS - lengths[s]);
+    bits = Math.max(bits, lengths[s]);
   }
   if (kraft > 1 << PREFIX_CODE_BITS) throw corrupt('prefix code lengths over-subscribe the code space');
-  const table = new Uint16Array(1 << PREFIX_CODE_BITS);
+  const entries = new Uint16Array(1 << bits);
   let code = 0;
-  for (let len = 1; len <= PREFIX_CODE_BITS; ++len) {
+  for (let len = 1; len <= bits; ++len) {
     for (let s = 0; s < 256; ++s) {
       if (lengths[s] !== len) continue;
-      const first = code << (PREFIX_CODE_BITS - len);
-      table.fill((len << 8) | s, first, first + (1 << (PREFIX_CODE_BITS - len)));
+      const first = code << (bits - len);
+      entries.fill((len << 8) | s, first, first + (1 << (bits - len)));
       ++code;
     }
     code <<= 1;
   }
-  return table;
+  return { bits, entries };
 }
 
 export class PrefixDecoder {
@@ -43,7 +46,7 @@ export class PrefixDecoder {
     const v = at + 3 <= end
       ? (bytes[at] << 16) | (bytes[at + 1] << 8) | bytes[at + 2]
       : ((at < end ? bytes[at] : 0) << 16) | ((at + 1 < end ? bytes[at + 1] : 0) << 8) | (at + 2 < end ? bytes[at + 2] : 0);
-    const e = table[(v >>> (12 - (this.pos & 7))) & PEEK_MASK];
+    const e = table.entries[((v >>> (12 - (this.pos & 7))) & PEEK_MASK) >>> (PREFIX_CODE_BITS - table.bits)];
     this.pos += e >>> 8;
     return e >>> 8 ? e & 0xff : -1;
   }
