@@ -3,6 +3,7 @@
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
 import { scan } from '../web/lib/config.mjs';
+import { ingest } from '../web/lib/pointdagd.mjs';
 import { openSession } from './browser.mjs';
 import { checkDrawn } from './drawn_check.mjs';
 import { intersectionOverUnion } from './screenshot_check.mjs';
@@ -133,5 +134,34 @@ test('the dataset page keeps its budget of resident points, unloading what the v
   // More was decoded than the budget holds, and resident stayed within it: tiles were unloaded.
   assert.ok(s.zoomedWest.decoder.voxels > budget, `decoded only ${s.zoomedWest.decoder.voxels} voxels: the zooms loaded nothing new`);
   assert.ok(s.zoomedWest.evictedTiles > 0);
+  assert.deepEqual(page.errors, []);
+});
+
+test('a statue scanned with Y up stands upright when the page is told so, and the page remembers it', async (t) => {
+  // Guanyin (a photogrammetry statue, Y up in its PLY): lying on its side with Z up, standing with Y up.
+  const id = await ingest(daemon.url, scan('pcx_guanyin_cc-by-4.0_rgb.ply'), { name: 'guanyin-up', token: TOKEN });
+  const path = `/datasets/${id}`;
+  const aspect = (b) => (b.y1 - b.y0) / (b.x1 - b.x0);
+  await page.goto(`${daemon.url}${path}`);
+  assert.equal(await page.locator('#up-axis').inputValue(), 'z');
+  await page.locator('#up-axis').selectOption('y');
+  assert.equal(await page.evaluate((key) => localStorage.getItem(key), `pointdag.up.${id}`), 'y');
+  // Drawn and screenshot after a reload, which keeps the choice (checkDrawn hides the top bar).
+  await page.goto(`${daemon.url}${path}`);
+  assert.equal(await page.locator('#up-axis').inputValue(), 'y');
+  const statue = { minIou: 0.3 };
+  const y = await checkDrawn(page, 'guanyin-up-y', t, statue);
+  // The URL's choice wins over the remembered one.
+  await page.goto(`${daemon.url}${path}?up=z`);
+  assert.equal(await page.locator('#up-axis').inputValue(), 'z');
+  const z = await checkDrawn(page, 'guanyin-up-z', t, statue);
+  t.diagnostic(`drawn aspect (height / width): Z up ${aspect(z.fg.box).toFixed(2)}, Y up ${aspect(y.fg.box).toFixed(2)}`);
+  assert.ok(aspect(y.fg.box) > 1.2, `Y up: the statue does not stand: ${JSON.stringify(y.fg.box)}`);
+  assert.ok(aspect(y.fg.box) > 1.25 * aspect(z.fg.box), `Z up ${JSON.stringify(z.fg.box)}, Y up ${JSON.stringify(y.fg.box)}`);
+  // The 3D Tiles page follows the remembered choice.
+  await page.goto(`${daemon.url}${path}/3dtiles`);
+  assert.equal(await page.locator('#up-axis').inputValue(), 'y');
+  const tiles = await checkDrawn(page, 'guanyin-3dtiles-up-y', t, statue);
+  assert.ok(intersectionOverUnion(tiles.fg.box, y.fg.box) >= 0.9, `3D Tiles ${JSON.stringify(tiles.fg.box)}, pdag ${JSON.stringify(y.fg.box)}`);
   assert.deepEqual(page.errors, []);
 });

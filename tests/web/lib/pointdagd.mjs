@@ -88,10 +88,11 @@ async function getJson(url) {
 }
 
 // Uploads the scan and waits for its job; returns the dataset id.
-export async function ingest(baseUrl, scanPath, { name = 'scan', timeoutSeconds = 600 } = {}) {
+export async function ingest(baseUrl, scanPath, { name = 'scan', token = null, timeoutSeconds = 600 } = {}) {
   const posted = await fetch(`${baseUrl}/v1/datasets?name=${encodeURIComponent(name)}`, {
     method: 'POST',
     body: readFileSync(scanPath),
+    headers: token ? { Authorization: `Bearer ${token}` } : {},
   });
   if (posted.status !== 202) throw new Error(`upload of ${scanPath}: ${posted.status} ${await posted.text()}`);
   const location = posted.headers.get('location');

@@ -1,12 +1,13 @@
 // `/datasets/{id}` (kind 'pdag': our .pdag tiles, decoded in Web Workers) and
 // `/datasets/{id}/3dtiles` (kind '3dtiles': the 3D Tiles tileset drawn by 3d-tiles-renderer):
 // a full-window scene, a top bar, and the HUD. Both expose the test hooks of contract 5 as
-// window.pointdagViewer. The pages of a dataset with shadows have a "Shadows" toggle
-// (?shadows=1 starts with it on).
+// window.pointdagViewer. Both choose which axis points up (?up=z|y|-y, remembered per dataset). The
+// pages of a dataset with shadows have a "Shadows" toggle (?shadows=1 starts with it on).
 import { h } from './dom.js';
 import { formatBytes, formatDracoRatio, formatFixed, formatInt, formatLength } from './format.js';
 import { Hud } from './hud.js';
 import { ShadowToggle } from './shadow_toggle.js';
+import { UpAxisSelect } from './up_axis_select.js';
 
 const HUD_MS = 250;
 
@@ -53,12 +54,19 @@ export class DatasetPage {
   async start() {
     try {
       // The metadata and the viewer's code load side by side.
-      const [dataset, { SceneView }, Viewer] = await Promise.all([
+      const [dataset, { SceneView, UP_AXES }, Viewer] = await Promise.all([
         this.api.dataset(this.id), import('../viewer/scene_view.js'), this.viewerClass()]);
       this.title.textContent = dataset.name;
       document.title = `${dataset.name} · pointdag`;
       this.hud.setMeta(metaRows(dataset));
-      const viewer = new Viewer(new SceneView(this.viewport), this.api, dataset, this.params);
+      const up = new UpAxisSelect(this.id, UP_AXES, this.params);
+      const view = new SceneView(this.viewport, up.axis);
+      const viewer = new Viewer(view, this.api, dataset, this.params);
+      up.onChange = (axis) => {
+        view.setUpAxis(axis);
+        viewer.fit();
+      };
+      this.tools.append(up.element);
       window.pointdagViewer = { state: () => viewer.state(), projectedBounds: () => viewer.projectedBounds() };
       if (dataset.shadows && viewer.setShadows) this.addShadowToggle(dataset.shadows, viewer);
       this.fitButton.addEventListener('click', () => viewer.fit());

@@ -66,7 +66,7 @@ export class PdagViewer {
     this.firstFrameMs = null;
     this.finestMs = null;
     this.userMoved = false;
-    view.controls.addEventListener('start', () => { this.userMoved = true; });
+    view.onUserMove(() => { this.userMoved = true; });
     view.onFrame = () => this.update();
   }
 

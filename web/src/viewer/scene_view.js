@@ -1,16 +1,23 @@
 // The three.js scene both dataset views draw into: a WebGL canvas filling its container, a
-// perspective camera with Z up (the datasets' ENU frame), OrbitControls, and a render loop that
-// draws on demand (after a camera move, a resize or a tile load), calling onFrame() first.
+// perspective camera whose up is the frame's Z (the datasets' ENU frame) or a model's Y, OrbitControls,
+// and a render loop that draws on demand (after a camera move, a resize or a tile load), calling
+// onFrame() first.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 
 export const BACKGROUND = 0x1b2230;
 
-// The default view looks down on the data from the south-west, 40 degrees above the horizon.
-const VIEW_DIRECTION = new THREE.Vector3(-0.45, -0.75, 0.85).normalize();
+// Which axis of the dataset's frame points up: Z for georeferenced scans (ENU) and most LIDAR; Y for
+// photogrammetry statues and many PLY models; -Y for depth cameras (their Y points down). `view`: the
+// default view, from the "south-west" 40 degrees above the horizon, in that frame (east X, north up x X).
+export const UP_AXES = {
+  z: { label: 'Z up', up: [0, 0, 1], view: [-0.45, -0.75, 0.85] },
+  y: { label: 'Y up', up: [0, 1, 0], view: [-0.45, 0.85, 0.75] },
+  '-y': { label: '−Y up', up: [0, -1, 0], view: [-0.45, -0.85, -0.75] },
+};
 
 export class SceneView {
-  constructor(container) {
+  constructor(container, upAxis = 'z') {
     this.container = container;
     this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'high-performance' });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
@@ -18,11 +25,10 @@ export class SceneView {
     container.append(this.renderer.domElement);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.1, 1000);
-    this.camera.up.set(0, 0, 1);
-    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
-    this.controls.screenSpacePanning = true;
-    this.controls.zoomToCursor = true; // the wheel zooms into the part of the data under the mouse
-    this.controls.addEventListener('change', () => this.requestRender());
+    this.moveListeners = [];
+    this.upAxis = upAxis in UP_AXES ? upAxis : 'z';
+    this.camera.up.set(...UP_AXES[this.upAxis].up);
+    this.controls = this.makeControls();
     this.radius = 1;
     this.onFrame = () => {};
     this.frameMs = 0;
@@ -37,6 +43,34 @@ export class SceneView {
 
   requestRender() {
     this.dirty = true;
+  }
+
+  // OrbitControls orbit about the camera's up as it was when they were made: a new up needs new controls.
+  makeControls() {
+    const controls = new OrbitControls(this.camera, this.renderer.domElement);
+    controls.screenSpacePanning = true;
+    controls.zoomToCursor = true; // the wheel zooms into the part of the data under the mouse
+    controls.addEventListener('change', () => this.requestRender());
+    controls.addEventListener('start', () => this.moveListeners.forEach((listener) => listener()));
+    return controls;
+  }
+
+  // Called when the user starts moving the camera.
+  onUserMove(listener) {
+    this.moveListeners.push(listener);
+  }
+
+  // Turns the view to another up axis (a key of UP_AXES) about the same target; fit() again to see it all.
+  setUpAxis(axis) {
+    if (!(axis in UP_AXES)) throw new Error(`unknown up axis ${axis}`);
+    this.upAxis = axis;
+    this.camera.up.set(...UP_AXES[axis].up);
+    const target = this.controls.target.clone();
+    this.controls.dispose();
+    this.controls = this.makeControls();
+    this.controls.target.copy(target);
+    this.controls.update();
+    this.requestRender();
   }
 
   resize() {
@@ -58,7 +92,8 @@ export class SceneView {
   fit(box) {
     const centre = box.getCenter(new THREE.Vector3());
     this.radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
-    const forward = VIEW_DIRECTION.clone().negate();
+    const viewDirection = new THREE.Vector3(...UP_AXES[this.upAxis].view).normalize();
+    const forward = viewDirection.clone().negate();
     const right = new THREE.Vector3().crossVectors(forward, this.camera.up).normalize();
     const up = new THREE.Vector3().crossVectors(right, forward);
     const tanV = Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 0.95;
@@ -71,7 +106,7 @@ export class SceneView {
       distance = Math.max(distance, q.dot(forward) + depth);
     }
     this.controls.target.copy(centre);
-    this.camera.position.copy(centre).addScaledVector(VIEW_DIRECTION, Math.max(distance, this.radius * 1e-3));
+    this.camera.position.copy(centre).addScaledVector(viewDirection, Math.max(distance, this.radius * 1e-3));
     this.controls.update();
     this.requestRender();
   }
