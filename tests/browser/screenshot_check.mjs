@@ -26,6 +26,21 @@ export function foreground(png, tolerance = 12) {
   return { width, height, share: count / (width * height), box: count ? box : null };
 }
 
+// The share of the foreground pixels (as foreground() finds them) whose [r, g, b] pass `predicate`.
+export function foregroundShare(png, predicate, tolerance = 12) {
+  const { PNG } = requireWebModule('pngjs');
+  const { width, height, data } = PNG.sync.read(png);
+  let all = 0;
+  let passing = 0;
+  for (let i = 0; i < 4 * width * height; i += 4) {
+    const rgb = [data[i], data[i + 1], data[i + 2]];
+    if (rgb.every((v, c) => Math.abs(v - BACKGROUND[c]) <= tolerance)) continue;
+    all++;
+    if (predicate(rgb)) passing++;
+  }
+  return all ? passing / all : 0;
+}
+
 function area(r) {
   return Math.max(0, r.x1 - r.x0) * Math.max(0, r.y1 - r.y0);
 }

@@ -1,12 +1,14 @@
 // Through the pages in a real Chromium against a real pointdagd: upload a scan on the home page,
 // follow its job to a link, then see the dataset drawn from our .pdag tiles and from its 3D Tiles.
 import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 import { scan } from '../web/lib/config.mjs';
 import { ingest } from '../web/lib/pointdagd.mjs';
 import { openSession } from './browser.mjs';
 import { checkDrawn } from './drawn_check.mjs';
-import { intersectionOverUnion } from './screenshot_check.mjs';
+import { foregroundShare, intersectionOverUnion } from './screenshot_check.mjs';
 
 const TOKEN = 'browser-test-write-token';
 const NAME = 'autzen-browser';
@@ -163,5 +165,20 @@ test('a statue scanned with Y up stands upright when the page is told so, and th
   assert.equal(await page.locator('#up-axis').inputValue(), 'y');
   const tiles = await checkDrawn(page, 'guanyin-3dtiles-up-y', t, statue);
   assert.ok(intersectionOverUnion(tiles.fg.box, y.fg.box) >= 0.9, `3D Tiles ${JSON.stringify(tiles.fg.box)}, pdag ${JSON.stringify(y.fg.box)}`);
+  assert.deepEqual(page.errors, []);
+});
+
+test('a scan without color is drawn by height, low violet to high yellow, along the chosen up axis', async (t) => {
+  // (its LAS names a geocentric CRS for UTM 12N coordinates: the upload says which)
+  const id = await ingest(daemon.url, scan('lone_star_tls_noRGB.las'), { name: 'lone-star', token: TOKEN, epsg: 26912 });
+  await page.goto(`${daemon.url}/datasets/${id}?up=z`);
+  const drawn = await checkDrawn(page, 'lone-star-height', t, { minIou: 0.3 });
+  const png = readFileSync(join(process.env.POINTDAG_SCREENSHOT_DIR || '.', 'lone-star-height.png'));
+  // The ramp's low end is blue over green (violet, 68 1 84), its high end green well over blue
+  // (yellow-green, 94 201 98 and 253 231 37); the old flat grey (200 204 212) is neither.
+  const low = foregroundShare(png, ([, g, b]) => b > g + 20);
+  const high = foregroundShare(png, ([, g, b]) => g > b + 40);
+  t.diagnostic(`foreground ${(drawn.fg.share * 100).toFixed(1)}% of the canvas: ${(low * 100).toFixed(1)}% low colors, ${(high * 100).toFixed(1)}% high`);
+  assert.ok(low > 0.05 && high > 0.05, `low ${low}, high ${high}`);
   assert.deepEqual(page.errors, []);
 });

@@ -88,8 +88,9 @@ async function getJson(url) {
 }
 
 // Uploads the scan and waits for its job; returns the dataset id.
-export async function ingest(baseUrl, scanPath, { name = 'scan', token = null, timeoutSeconds = 600 } = {}) {
-  const posted = await fetch(`${baseUrl}/v1/datasets?name=${encodeURIComponent(name)}`, {
+export async function ingest(baseUrl, scanPath, { name = 'scan', token = null, epsg = null, timeoutSeconds = 600 } = {}) {
+  const crs = epsg ? `&epsg=${epsg}` : '';
+  const posted = await fetch(`${baseUrl}/v1/datasets?name=${encodeURIComponent(name)}${crs}`, {
     method: 'POST',
     body: readFileSync(scanPath),
     headers: token ? { Authorization: `Bearer ${token}` } : {},

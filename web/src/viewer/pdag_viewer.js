@@ -5,6 +5,7 @@
 /* global POINTDAG_WORKER_URL, POINTDAG_WASM_URL */
 import { formatBytes, formatInt } from '../app/format.js';
 import { DecoderPool } from './decoder_pool.js';
+import { heightRange, paintByHeight } from './height_colors.js';
 import { LodSelector } from './lod_selector.js';
 import { PointMaterials } from './point_materials.js';
 import { positiveParam } from './query_param.js';
@@ -59,6 +60,7 @@ export class PdagViewer {
       maxInFlight: numberParam(params, 'inflight'),
       onLoaded: (node) => this.tileLoaded(node),
       shadows: this.shadows,
+      paint: (points) => paintByHeight(points, view.upAxis, this.heights(points)),
     });
     this.frame = 0;
     this.drawn = [];
@@ -83,6 +85,26 @@ export class PdagViewer {
 
   fit() {
     this.view.fit(this.dataBox());
+  }
+
+  // The heights that colors span along the view's up axis (height_colors.js): those of the first tile
+  // painted (the root), kept until the axis changes.
+  heights(points) {
+    if (!this.heightSpan || this.heightSpan.axis !== this.view.upAxis) {
+      this.heightSpan = { axis: this.view.upAxis, range: heightRange(points, this.view.upAxis) };
+    }
+    return this.heightSpan.range;
+  }
+
+  // After the view's up axis changed: tiles colored by height take the new heights (the root's).
+  upAxisChanged() {
+    const painted = [...this.cache.tiles].filter((node) => node.points?.userData.paintedByHeight);
+    if (!painted.length) return;
+    const root = painted.find((node) => node === this.hierarchy.root) || painted[0];
+    this.heightSpan = null;
+    const heights = this.heights(root.points);
+    for (const node of painted) paintByHeight(node.points, this.view.upAxis, heights);
+    this.view.requestRender();
   }
 
   // The darkest shading (a voxel never lit): the toggle's legend shows it.

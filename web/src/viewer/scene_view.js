@@ -21,7 +21,10 @@ export class SceneView {
     this.container = container;
     this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'high-performance' });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
-    this.renderer.setClearColor(BACKGROUND, 1);
+    // Scans store sRGB bytes, and their points are drawn with exactly those: three.js takes vertex
+    // colors as linear and would brighten them on output to sRGB (a violet 68 1 84 drawn as 143 13 156).
+    this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+    this.renderer.setClearColor(new THREE.Color().setHex(BACKGROUND, THREE.LinearSRGBColorSpace), 1);
     container.append(this.renderer.domElement);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.1, 1000);

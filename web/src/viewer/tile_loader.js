@@ -5,8 +5,8 @@ import { buildTilePoints } from './tile_points.js';
 
 export class TileLoader {
   // shadows: ShadowLayers, or null for a dataset without shadows.
-  constructor({ api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows = null }) {
-    Object.assign(this, { api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows });
+  constructor({ api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows = null, paint = null }) {
+    Object.assign(this, { api, datasetId, pool, cache, materials, frameOrigin, maxInFlight, onLoaded, shadows, paint });
     this.queue = [];
     this.inFlight = 0;
     this.inFlightPoints = 0;
@@ -49,7 +49,7 @@ export class TileLoader {
       if (decoded.count !== node.voxels) {
         throw new Error(`decoded ${decoded.count} voxels, the hierarchy says ${node.voxels}`);
       }
-      this.cache.add(node, buildTilePoints(decoded, this.frameOrigin, this.materials));
+      this.cache.add(node, buildTilePoints(decoded, this.frameOrigin, this.materials, this.paint));
       this.shadows?.adopt(node, layer);
       this.loaded++;
     } catch (err) {

@@ -4,12 +4,13 @@
 // frame (the dataset centre), so the GPU never sees large coordinates and no per-point work is done.
 import * as THREE from 'three';
 
-export function buildTilePoints(decoded, frameOrigin, materials) {
+// paint(points): colors for a tile without its own (height_colors.js); null: drawn in one grey.
+export function buildTilePoints(decoded, frameOrigin, materials, paint = null) {
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(decoded.coords, 3));
   const hasColor = !!decoded.colors;
   if (hasColor) geometry.setAttribute('color', new THREE.BufferAttribute(decoded.colors, 3, true));
-  const points = new THREE.Points(geometry, materials.get(decoded.voxelSize, hasColor));
+  const points = new THREE.Points(geometry, materials.get(decoded.voxelSize, hasColor || !!paint));
   const half = decoded.voxelSize / 2;
   points.position.set(
     decoded.origin[0] - frameOrigin[0] + half,
@@ -19,5 +20,9 @@ export function buildTilePoints(decoded, frameOrigin, materials) {
   points.matrixAutoUpdate = false;
   points.updateMatrix();
   points.visible = false;
+  if (!hasColor && paint) {
+    points.userData.paintedByHeight = true;
+    paint(points);
+  }
   return points;
 }
