@@ -42,5 +42,5 @@ export async function checkDrawn(page, name, t, { minIou = MIN_IOU } = {}) {
   assert.ok(iou >= minIou, `${report}: IoU ${iou.toFixed(3)} < ${minIou}`);
   t.diagnostic(`${report}, IoU ${iou.toFixed(3)}; levels ${state.levelsDrawn}, ${state.tilesOnScreen} tiles, ` +
     `${state.pointsOnScreen} points, first frame ${state.firstFrameMs.toFixed(0)} ms, finest ${state.finestMs.toFixed(0)} ms`);
-  return { state, bounds, fg, iou };
+  return { state, bounds, fg, iou, png };
 }

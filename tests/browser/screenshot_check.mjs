@@ -41,6 +41,20 @@ export function foregroundShare(png, predicate, tolerance = 12) {
   return all ? passing / all : 0;
 }
 
+// The mean [r, g, b] of the foreground pixels.
+export function foregroundMean(png, tolerance = 12) {
+  const { PNG } = requireWebModule('pngjs');
+  const { width, height, data } = PNG.sync.read(png);
+  const sum = [0, 0, 0];
+  let n = 0;
+  for (let i = 0; i < 4 * width * height; i += 4) {
+    if ([0, 1, 2].every((c) => Math.abs(data[i + c] - BACKGROUND[c]) <= tolerance)) continue;
+    for (let c = 0; c < 3; ++c) sum[c] += data[i + c];
+    n++;
+  }
+  return sum.map((v) => v / Math.max(n, 1));
+}
+
 function area(r) {
   return Math.max(0, r.x1 - r.x0) * Math.max(0, r.y1 - r.y0);
 }

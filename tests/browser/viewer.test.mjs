@@ -1,14 +1,12 @@
 // Through the pages in a real Chromium against a real pointdagd: upload a scan on the home page,
 // follow its job to a link, then see the dataset drawn from our .pdag tiles and from its 3D Tiles.
 import assert from 'node:assert/strict';
-import { readFileSync } from 'node:fs';
-import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 import { scan } from '../web/lib/config.mjs';
 import { ingest } from '../web/lib/pointdagd.mjs';
 import { openSession } from './browser.mjs';
 import { checkDrawn } from './drawn_check.mjs';
-import { foregroundShare, intersectionOverUnion } from './screenshot_check.mjs';
+import { foregroundMean, foregroundShare, intersectionOverUnion } from './screenshot_check.mjs';
 
 const TOKEN = 'browser-test-write-token';
 const NAME = 'autzen-browser';
@@ -82,6 +80,11 @@ test('the 3D Tiles page draws the same scan with 3d-tiles-renderer', async (t) =
   assert.equal(drawn.state.pointsOnScreen, pdagDrawn.state.pointsOnScreen);
   const iou = intersectionOverUnion(drawn.fg.box, pdagDrawn.fg.box);
   assert.ok(iou >= 0.9, `the 3D Tiles page drew the scan at ${JSON.stringify(drawn.fg.box)}, the .pdag page at ${JSON.stringify(pdagDrawn.fg.box)}`);
+  // In the same colors: the .pdag page draws the tiles' sRGB bytes as they are, the 3D Tiles page
+  // glTF's linear COLOR_0 converted back to sRGB on output.
+  const [ours, theirs] = [foregroundMean(pdagDrawn.png), foregroundMean(drawn.png)];
+  t.diagnostic(`mean color: .pdag page ${ours.map((v) => v.toFixed(1))}, 3D Tiles page ${theirs.map((v) => v.toFixed(1))}`);
+  for (let c = 0; c < 3; ++c) assert.ok(Math.abs(ours[c] - theirs[c]) < 2, `mean colors ${ours} and ${theirs}`);
   assert.deepEqual(page.errors, []);
 });
 
@@ -173,7 +176,7 @@ test('a scan without color is drawn by height, low violet to high yellow, along 
   const id = await ingest(daemon.url, scan('lone_star_tls_noRGB.las'), { name: 'lone-star', token: TOKEN, epsg: 26912 });
   await page.goto(`${daemon.url}/datasets/${id}?up=z`);
   const drawn = await checkDrawn(page, 'lone-star-height', t, { minIou: 0.3 });
-  const png = readFileSync(join(process.env.POINTDAG_SCREENSHOT_DIR || '.', 'lone-star-height.png'));
+  const { png } = drawn;
   // The ramp's low end is blue over green (violet, 68 1 84), its high end green well over blue
   // (yellow-green, 94 201 98 and 253 231 37); the old flat grey (200 204 212) is neither.
   const low = foregroundShare(png, ([, g, b]) => b > g + 20);

@@ -4,7 +4,10 @@
 #include <meshoptimizer.h>
 
 #include <cstring>
+#include <map>
 #include <string>
+
+#include "pointdag/tiles3d/glb_writer.h"
 
 namespace pointdag::testing {
 namespace {
@@ -109,14 +112,26 @@ GlbPoints ReadGlb(std::span<const uint8_t> glb) {
   if (primitive["attributes"].contains("COLOR_0")) {
     const int color_index = primitive["attributes"]["COLOR_0"];
     const nlohmann::json& color = g["accessors"][color_index];
-    EXPECT_EQ(color["componentType"], 5121);
+    EXPECT_EQ(color["componentType"], 5123);
     EXPECT_EQ(color["type"], "VEC3");
     EXPECT_EQ(color["normalized"], true);
     EXPECT_EQ(color["count"], count);
-    const std::vector<uint8_t> rgb = DecodeAttribute(g, bin, color_index, 4);
+    const std::vector<uint8_t> rgb = DecodeAttribute(g, bin, color_index, 8);
+    // Linear 16-bit colors back to the sRGB bytes they came from: each must be one of LinearColor16's.
+    std::map<uint16_t, uint8_t> srgb_of;
+    for (int v = 0; v < 256; ++v) srgb_of[LinearColor16(static_cast<uint8_t>(v))] = static_cast<uint8_t>(v);
+    EXPECT_EQ(srgb_of.size(), 256u);  // one linear value per byte: the bytes come back exactly
     for (size_t i = 0; i < count; ++i) {
-      out.colors.push_back({rgb[4 * i], rgb[4 * i + 1], rgb[4 * i + 2]});
-      out.padding_zero = out.padding_zero && rgb[4 * i + 3] == 0;
+      std::array<uint16_t, 4> c{};
+      std::memcpy(c.data(), rgb.data() + 8 * i, 8);
+      std::array<uint8_t, 3> back{};
+      for (int k = 0; k < 3; ++k) {
+        const auto it = srgb_of.find(c[k]);
+        EXPECT_NE(it, srgb_of.end()) << "COLOR_0 " << c[k] << " is no sRGB byte's linear value";
+        back[k] = it == srgb_of.end() ? 0 : it->second;
+      }
+      out.colors.push_back({back[0], back[1], back[2]});
+      out.padding_zero = out.padding_zero && c[3] == 0;
     }
   }
   return out;

@@ -3,6 +3,7 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -12,9 +13,9 @@
 namespace pointdag {
 namespace {
 
-constexpr int kUnsignedByte = 5121, kUnsignedShort = 5123, kArrayBuffer = 34962;
+constexpr int kUnsignedShort = 5123, kArrayBuffer = 34962;
 constexpr size_t kPositionStride = 8;  // u16 x, y, z and two bytes of padding: attributes align to 4
-constexpr size_t kColorStride = 4;     // u8 r, g, b and one byte of padding
+constexpr size_t kColorStride = 8;     // u16 r, g, b and two bytes of padding
 
 void PutU32(std::vector<uint8_t>& out, uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
@@ -59,6 +60,19 @@ nlohmann::json BufferView(const Stream& s) {
 }
 
 }  // namespace
+
+uint16_t LinearColor16(uint8_t srgb) {
+  static const std::array<uint16_t, 256> kTable = [] {
+    std::array<uint16_t, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      const double c = i / 255.0;  // the sRGB transfer function, inverted (IEC 61966-2-1)
+      const double linear = c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+      t[i] = static_cast<uint16_t>(std::lround(65535.0 * linear));
+    }
+    return t;
+  }();
+  return kTable[srgb];
+}
 
 std::array<double, 16> TileNodeMatrix(const std::array<double, 3>& origin, double voxel_size) {
   const double s = voxel_size;
@@ -110,15 +124,17 @@ StatusOr<std::vector<uint8_t>> WriteTileGlb(const VoxelGrid& tile) {
   nlohmann::json attributes = {{"POSITION", 0}};
   size_t fallback_bytes = n * kPositionStride;
   if (tile.has_color()) {
-    std::vector<uint8_t> colors(kColorStride * n, 0);
+    std::vector<uint8_t> colors(kColorStride * n, 0);  // little-endian u16, as glTF requires
     for (size_t i = 0; i < n; ++i) {
-      colors[4 * i] = tile.colors[i].r;
-      colors[4 * i + 1] = tile.colors[i].g;
-      colors[4 * i + 2] = tile.colors[i].b;
+      const uint16_t rgb[3] = {LinearColor16(tile.colors[i].r), LinearColor16(tile.colors[i].g), LinearColor16(tile.colors[i].b)};
+      for (int c = 0; c < 3; ++c) {
+        colors[8 * i + 2 * c] = static_cast<uint8_t>(rgb[c]);
+        colors[8 * i + 2 * c + 1] = static_cast<uint8_t>(rgb[c] >> 8);
+      }
     }
     views.push_back(BufferView(Encode(bin, colors.data(), n, kColorStride, fallback_bytes)));
     fallback_bytes += n * kColorStride;
-    accessors.push_back({{"bufferView", 1}, {"componentType", kUnsignedByte}, {"normalized", true}, {"count", n}, {"type", "VEC3"}});
+    accessors.push_back({{"bufferView", 1}, {"componentType", kUnsignedShort}, {"normalized", true}, {"count", n}, {"type", "VEC3"}});
     attributes["COLOR_0"] = 1;
   }
 

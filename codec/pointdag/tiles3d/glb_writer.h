@@ -4,8 +4,9 @@
 // voxel in the tile's Morton order.
 //   POSITION: the voxel's integer cell (i, j, k), unsigned short, not normalized, VEC3 at an
 //     8-byte stride (legal through KHR_mesh_quantization), with min/max.
-//   COLOR_0: the voxel's 8-bit color, normalized unsigned byte VEC3 at a 4-byte stride; absent
-//     when the tile has no colors.
+//   COLOR_0: the voxel's color, linear as glTF defines vertex colors: each stored sRGB byte through
+//     the inverse sRGB transfer function (LinearColor16), normalized unsigned short VEC3 at an 8-byte
+//     stride (8 bits of linear color would band the darks); absent when the tile has no colors.
 //   Both vertex streams are compressed with EXT_meshopt_compression (mode ATTRIBUTES, filter
 //     NONE, vertex codec version 0, the only one that extension allows) into the GLB's BIN chunk
 //     (buffer 0); their bufferViews point into buffer 1, the fallback buffer with no data
@@ -24,6 +25,9 @@
 #include "pointdag/voxelize/voxelizer.h"
 
 namespace pointdag {
+
+// An sRGB byte as the 16-bit linear value COLOR_0 stores: round(65535 * linear(srgb / 255)).
+uint16_t LinearColor16(uint8_t srgb);
 
 // The node matrix (column-major) that WriteTileGlb writes for a tile with this origin and voxel size.
 std::array<double, 16> TileNodeMatrix(const std::array<double, 3>& origin, double voxel_size);

@@ -60,7 +60,8 @@ export class DatasetPage {
       document.title = `${dataset.name} · pointdag`;
       this.hud.setMeta(metaRows(dataset));
       const up = new UpAxisSelect(this.id, UP_AXES, this.params);
-      const view = new SceneView(this.viewport, up.axis);
+      // .pdag tiles decode to sRGB bytes; 3D Tiles carry linear colors (glTF's COLOR_0).
+      const view = new SceneView(this.viewport, up.axis, { srgbColors: this.kind === 'pdag' });
       const viewer = new Viewer(view, this.api, dataset, this.params);
       up.onChange = (axis) => {
         view.setUpAxis(axis);

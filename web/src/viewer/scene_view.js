@@ -17,14 +17,16 @@ export const UP_AXES = {
 };
 
 export class SceneView {
-  constructor(container, upAxis = 'z') {
+  // srgbColors: the points' vertex colors are sRGB bytes (our .pdag tiles), drawn as they are; else
+  // they are linear, as glTF's (3D Tiles), and converted to sRGB on output as three.js does.
+  constructor(container, upAxis = 'z', { srgbColors = true } = {}) {
     this.container = container;
     this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'high-performance' });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
     // Scans store sRGB bytes, and their points are drawn with exactly those: three.js takes vertex
     // colors as linear and would brighten them on output to sRGB (a violet 68 1 84 drawn as 143 13 156).
-    this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
-    this.renderer.setClearColor(new THREE.Color().setHex(BACKGROUND, THREE.LinearSRGBColorSpace), 1);
+    if (srgbColors) this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+    this.renderer.setClearColor(new THREE.Color().setHex(BACKGROUND, this.renderer.outputColorSpace), 1);
     container.append(this.renderer.domElement);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.1, 1000);
