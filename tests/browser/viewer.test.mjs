@@ -183,5 +183,11 @@ test('a scan without color is drawn by height, low violet to high yellow, along 
   const high = foregroundShare(png, ([, g, b]) => g > b + 40);
   t.diagnostic(`foreground ${(drawn.fg.share * 100).toFixed(1)}% of the canvas: ${(low * 100).toFixed(1)}% low colors, ${(high * 100).toFixed(1)}% high`);
   assert.ok(low > 0.05 && high > 0.05, `low ${low}, high ${high}`);
+  // The 3D Tiles page colors it alike (in linear colors, as its glTF are).
+  await page.goto(`${daemon.url}/datasets/${id}/3dtiles?up=z`);
+  const tiles = await checkDrawn(page, 'lone-star-height-3dtiles', t, { minIou: 0.3 });
+  const [ours, theirs] = [foregroundMean(png), foregroundMean(tiles.png)];
+  t.diagnostic(`mean color: .pdag page ${ours.map((v) => v.toFixed(1))}, 3D Tiles page ${theirs.map((v) => v.toFixed(1))}`);
+  for (let c = 0; c < 3; ++c) assert.ok(Math.abs(ours[c] - theirs[c]) < 3, `mean colors ${ours} and ${theirs}`);
   assert.deepEqual(page.errors, []);
 });

@@ -65,7 +65,7 @@ export class DatasetPage {
       const viewer = new Viewer(view, this.api, dataset, this.params);
       up.onChange = (axis) => {
         view.setUpAxis(axis);
-        viewer.upAxisChanged?.(); // tiles colored by height (the .pdag page)
+        viewer.upAxisChanged(); // tiles colored by height
         viewer.fit();
       };
       this.tools.append(up.element);

@@ -4,7 +4,9 @@
 // 99th percentile (a few stray points far above or below would squeeze the rest into one color), so
 // that ground, buildings and trees read apart instead of one grey.
 // The colors are a per-point attribute, like a colored scan's: shadow shading applies to them alike,
-// and a new up axis repaints the resident tiles.
+// and a new up axis repaints the resident tiles. `matrix` (THREE.Matrix4) maps the points' position
+// attribute into the viewer's frame; `linear`: 16-bit linear colors (a glTF page's, converted to sRGB on
+// output) instead of the sRGB bytes the .pdag page draws as they are.
 import * as THREE from 'three';
 
 // Viridis from a tenth up (its darkest violet is lost on the dark background), low to high.
@@ -20,42 +22,55 @@ const RAMP = (() => {
   return ramp;
 })();
 
+const RAMP_LINEAR = Uint16Array.from(RAMP, (v) => {
+  const c = v / 255;
+  return Math.round(65535 * (c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4));
+});
+
 // Per up axis: the frame's component that is height, and its sign.
 const HEIGHT_OF = { z: [2, 1], y: [1, 1], '-y': [1, -1] };
 
-// The 1st and 99th percentile of the heights of `points` (tile_points.js) along `axis`.
-export function heightRange(points, axis) {
+// Height of point i: the matrix's row of that component applied to the cell, signed.
+function heightsOf(points, matrix, axis, visit) {
   const [k, sign] = HEIGHT_OF[axis];
-  const cells = points.geometry.getAttribute('position').array;
-  const n = cells.length / 3;
-  const heights = new Float64Array(n);
-  const base = sign * points.position.getComponent(k);
-  const step = sign * points.scale.x;
-  for (let i = 0; i < n; ++i) heights[i] = base + step * cells[3 * i + k];
+  const e = matrix.elements;
+  const [ax, ay, az, at] = [e[k], e[4 + k], e[8 + k], e[12 + k]].map((v) => sign * v);
+  const cells = points.geometry.getAttribute('position');
+  if (!cells.isInterleavedBufferAttribute && !cells.normalized) {  // .pdag tiles: packed x, y, z
+    const a = cells.array;
+    for (let i = 0; i < cells.count; ++i) visit(i, ax * a[3 * i] + ay * a[3 * i + 1] + az * a[3 * i + 2] + at);
+    return;
+  }
+  // glTF's may be strided (8-byte u16 cells): read through the attribute.
+  for (let i = 0; i < cells.count; ++i) visit(i, ax * cells.getX(i) + ay * cells.getY(i) + az * cells.getZ(i) + at);
+}
+
+// The 1st and 99th percentile of the heights of `points` along `axis`.
+export function heightRange(points, matrix, axis) {
+  const heights = new Float64Array(points.geometry.getAttribute('position').count);
+  heightsOf(points, matrix, axis, (i, h) => { heights[i] = h; });
   heights.sort();
+  const n = heights.length;
   return n ? [heights[Math.floor(0.01 * (n - 1))], heights[Math.ceil(0.99 * (n - 1))]] : [0, 1];
 }
 
-// Colors `points` (tile_points.js: integer cells scaled and placed by the object's matrix) by height.
-export function paintByHeight(points, axis, [lo, hi]) {
-  const [k, sign] = HEIGHT_OF[axis];
-  const cells = points.geometry.getAttribute('position').array;
-  const n = cells.length / 3;
+// Colors `points` by height.
+export function paintByHeight(points, matrix, axis, [lo, hi], { linear = false } = {}) {
+  const n = points.geometry.getAttribute('position').count;
   let colors = points.geometry.getAttribute('color');
   if (!colors) {
-    colors = new THREE.BufferAttribute(new Uint8Array(3 * n), 3, true);
+    colors = new THREE.BufferAttribute(linear ? new Uint16Array(3 * n) : new Uint8Array(3 * n), 3, true);
     points.geometry.setAttribute('color', colors);
   }
   const out = colors.array;
-  const base = sign * points.position.getComponent(k);
-  const step = sign * points.scale.x;
+  const ramp = linear ? RAMP_LINEAR : RAMP;
   const scale = 255 / Math.max(hi - lo, 1e-9);
-  for (let i = 0; i < n; ++i) {
-    const t = Math.round((base + step * cells[3 * i + k] - lo) * scale);
+  heightsOf(points, matrix, axis, (i, h) => {
+    const t = Math.round((h - lo) * scale);
     const j = 3 * (t < 0 ? 0 : t > 255 ? 255 : t);
-    out[3 * i] = RAMP[j];
-    out[3 * i + 1] = RAMP[j + 1];
-    out[3 * i + 2] = RAMP[j + 2];
-  }
+    out[3 * i] = ramp[j];
+    out[3 * i + 1] = ramp[j + 1];
+    out[3 * i + 2] = ramp[j + 2];
+  });
   colors.needsUpdate = true;
 }

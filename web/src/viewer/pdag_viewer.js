@@ -60,7 +60,7 @@ export class PdagViewer {
       maxInFlight: numberParam(params, 'inflight'),
       onLoaded: (node) => this.tileLoaded(node),
       shadows: this.shadows,
-      paint: (points) => paintByHeight(points, view.upAxis, this.heights(points)),
+      paint: (points) => paintByHeight(points, points.matrix, view.upAxis, this.heights(points)),
     });
     this.frame = 0;
     this.drawn = [];
@@ -91,7 +91,7 @@ export class PdagViewer {
   // painted (the root), kept until the axis changes.
   heights(points) {
     if (!this.heightSpan || this.heightSpan.axis !== this.view.upAxis) {
-      this.heightSpan = { axis: this.view.upAxis, range: heightRange(points, this.view.upAxis) };
+      this.heightSpan = { axis: this.view.upAxis, range: heightRange(points, points.matrix, this.view.upAxis) };
     }
     return this.heightSpan.range;
   }
@@ -103,7 +103,7 @@ export class PdagViewer {
     const root = painted.find((node) => node === this.hierarchy.root) || painted[0];
     this.heightSpan = null;
     const heights = this.heights(root.points);
-    for (const node of painted) paintByHeight(node.points, this.view.upAxis, heights);
+    for (const node of painted) paintByHeight(node.points, node.points.matrix, this.view.upAxis, heights);
     this.view.requestRender();
   }
 

@@ -8,6 +8,7 @@ import { TilesRenderer } from '3d-tiles-renderer';
 import { GLTFExtensionsPlugin } from '3d-tiles-renderer/plugins';
 import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
 import { formatBytes } from '../app/format.js';
+import { heightRange, paintByHeight } from './height_colors.js';
 import { ByteCounterPlugin } from './byte_counter_plugin.js';
 import { worldPointSize } from './point_materials.js';
 import { positiveParam } from './query_param.js';
@@ -42,11 +43,16 @@ export class Tiles3dViewer {
     this.shadows = dataset.shadows
       ? new ShadowLayers(api, dataset.id, new ShadowShading(), () => view.requestRender()) : null;
     this.shadowTiles = new Map(); // a model's scene -> its stand-in for ShadowLayers
+    this.painted = new Map(); // a model's scene -> its Points colored by height (a scan without color)
+    this.heightSpan = null;
     this.tiles.addEventListener('load-model', (e) => {
       this.styleModel(e.scene, e.url);
       this.adoptShadows(e.scene, e.url);
     });
-    this.tiles.addEventListener('dispose-model', (e) => this.dropShadows(e.scene));
+    this.tiles.addEventListener('dispose-model', (e) => {
+      this.dropShadows(e.scene);
+      this.painted.delete(e.scene);
+    });
     this.tiles.addEventListener('load-error', (e) => { this.lastError = `${e.url}: ${e.error.message}`; });
     this.complete = false;
     this.firstFrameMs = null;
@@ -87,9 +93,53 @@ export class Tiles3dViewer {
       if (!obj.isPoints) return;
       obj.material.size = worldPointSize(voxel, this.view.camera);
       obj.material.sizeAttenuation = true;
+      if (!obj.geometry.attributes.color) this.paint(scene, obj, level);
       obj.material.vertexColors = !!obj.geometry.attributes.color;
       obj.material.needsUpdate = true;
     });
+  }
+
+  // A tile without colors by height (height_colors.js), in linear colors as glTF's; the heights span
+  // the root tile's, as on the .pdag page (a tile that arrives before the root lends its own until then).
+  paint(scene, points, level) {
+    this.painted.set(scene, { points, level });
+    const axis = this.view.upAxis;
+    const span = this.heightSpan;
+    if (!span || span.axis !== axis || (level === 0 && span.level !== 0)) {
+      this.heightSpan = { axis, level, range: heightRange(points, this.frameMatrix(scene, points), axis) };
+      if (span) return this.repaint(); // the tiles painted with the old span, this one among them
+    }
+    paintByHeight(points, this.frameMatrix(scene, points), axis, this.heightSpan.range, { linear: true });
+  }
+
+  repaint() {
+    for (const [scene, { points }] of this.painted) {
+      paintByHeight(points, this.frameMatrix(scene, points), this.view.upAxis, this.heightSpan.range, { linear: true });
+    }
+    this.view.requestRender();
+  }
+
+  // The points' matrix into the viewer's frame, from the glTF alone (PROTOCOL.md §3.1: the node maps
+  // a cell into glTF's y-up frame, 3D Tiles turns that z-up into the tileset's frame, whose root
+  // transform the frame group undoes, less the centre): the model's own root matrix, which the
+  // renderer sets as it places the model, is not read.
+  frameMatrix(scene, points) {
+    const matrix = new THREE.Matrix4();
+    for (let obj = points; obj && obj !== scene; obj = obj.parent) {
+      if (obj.matrixAutoUpdate) obj.updateMatrix();
+      matrix.premultiply(obj.matrix);
+    }
+    return matrix.premultiply(new THREE.Matrix4().makeRotationX(Math.PI / 2))
+      .premultiply(new THREE.Matrix4().makeTranslation(this.centre.clone().negate()));
+  }
+
+  // After the view's up axis changed: tiles colored by height take the new heights (the root's, or
+  // the coarsest tile's at hand).
+  upAxisChanged() {
+    if (!this.painted.size) return;
+    const [scene, { points, level }] = [...this.painted].reduce((a, b) => (b[1].level < a[1].level ? b : a));
+    this.heightSpan = { axis: this.view.upAxis, level, range: heightRange(points, this.frameMatrix(scene, points), this.view.upAxis) };
+    this.repaint();
   }
 
   // The model's stand-in for ShadowLayers: {points, voxels, path()} of its one Points object.
