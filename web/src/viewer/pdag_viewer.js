@@ -83,8 +83,9 @@ export class PdagViewer {
     return this.hierarchy.root.box;
   }
 
+  // Before the root page is read there is nothing to fit (start() fits once it is).
   fit() {
-    this.view.fit(this.dataBox());
+    if (this.hierarchy.root) this.view.fit(this.dataBox());
   }
 
   // The heights that colors span along the view's up axis (height_colors.js): those of the first tile
