@@ -1,4 +1,4 @@
-// The stored DAG stream alone (all four coders: the second byte picks one), as DecodePdag runs it for a
+// The stored DAG stream alone (all four coders: the second byte picks one; coder 3 in versions 6 and 7), as DecodePdag runs it for a
 // tile: nodes bounded as for a 2^24-voxel tile. A stream that decodes must re-encode to a stream
 // that decodes to the same DAG (or, for coder 2, be refused as storing a brick twice). EncodeDag
 // validates first, so a decoded DAG that Validate rejects aborts too: DecodeDag no longer runs
@@ -20,5 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (coder == pointdag::GeometryCoder::kSpatial && again.status().code() == pointdag::StatusCode::kInvalidArgument) continue;
     if (!again.ok() || !(pointdag::DecodeDag(*again).value() == *dag)) std::abort();
   }
+  const auto refs = pointdag::EncodeDag(*dag, pointdag::GeometryCoder::kTable, pointdag::kPrefixRefsStreamVersion);
+  if (!refs.ok() || !(pointdag::DecodeDag(*refs).value() == *dag)) std::abort();
   return 0;
 }

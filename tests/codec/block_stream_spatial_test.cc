@@ -81,7 +81,8 @@ TEST(BlockStreamSpatial, TheWriterRebuildsWhatTheDecoderDecodes) {
     ASSERT_TRUE(priced.ok()) << priced.status().ToString();
     for (const auto& blocks : {*EncodeBlocks(s.colors, layout, 12.0), priced->blocks}) {
       for (uint8_t version = 1; version <= kBlockStreamVersion; ++version) {
-        const std::span<const uint64_t> morton = version >= kFirstSpatialVersion ? std::span<const uint64_t>(s.morton) : std::span<const uint64_t>();
+        if (!IsBlockStreamVersion(version)) continue;
+        const std::span<const uint64_t> morton = HasSpatialContexts(version) ? std::span<const uint64_t>(s.morton) : std::span<const uint64_t>();
         std::vector<Rgb8> rebuilt;
         const auto stream = SerializeBlocksAsVersion(s.colors, blocks, layout, version, morton, &rebuilt);
         ASSERT_TRUE(stream.ok()) << stream.status().ToString();

@@ -61,9 +61,10 @@ TEST(Tiler, LevelsHoldTheExactMeanOfTheVoxelsTheyCover) {
 TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
   const VoxelGrid finest = SurfaceGrid();
   TilingOptions options;
-  options.colors = {ColorCodec::kVariableRate, 40.0};
+  options.colors.target_psnr_y = 40.0;
   EXPECT_EQ(options.geometry_coder, GeometryCoder::kTable);
-  EXPECT_EQ(options.geometry_version, kTableStreamVersion);
+  EXPECT_EQ(options.geometry_version, kPrefixRefsStreamVersion);
+  EXPECT_EQ(options.colors.block_version, kFixedWeightCodesVersion);
   auto set = BuildTiles(finest, ScanInfo{}, "surface", options);
   ASSERT_TRUE(set.ok()) << set.status().ToString();
   EXPECT_EQ(set->levels, 3);
@@ -84,6 +85,8 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
       const auto file = ParsePdag(t.bytes);
       ASSERT_TRUE(file.ok() && !file->geometry.empty());
       EXPECT_EQ(file->geometry[0], options.geometry_version) << "tiles take the faster-decoding geometry stream";
+      ASSERT_GE(file->colors.size(), 2u);
+      EXPECT_EQ(file->colors[1], kFixedWeightCodesVersion) << "and the faster-decoding block color stream";
       auto decoded = DecodePdag(*file);
       ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
       EXPECT_EQ(decoded->meta["tile"]["level"], level);

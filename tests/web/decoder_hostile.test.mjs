@@ -3,11 +3,14 @@
 // ignores, in the same voxels), quickly, without a crash, and the JavaScript decoder must fail
 // exactly where the C++ one (compiled to WebAssembly) fails: at the same check, or with the same output.
 import assert from 'node:assert/strict';
+import { createHash } from 'node:crypto';
 import { readFileSync } from 'node:fs';
 import { before, describe, test } from 'node:test';
 
 import { decodeBlockColors } from '../../web/src/decoder/block_colors.js';
 import { decodeDag } from '../../web/src/decoder/dag_stream.js';
+import { FIXED_WEIGHT_CODES_TEXT } from '../../web/src/decoder/fixed_weight_codes.js';
+import { fixedWeightCodeLengths } from '../../web/src/decoder/weight_groups.js';
 import { PdagError, decodePdag } from '../../web/src/decoder/decode_pdag.js';
 import { WASM_SKIPPED, config, loadWasm, scan } from './lib/config.mjs';
 import { denseCube, framePdag, sectionsOf, utf8, varint, writeGeometry } from './lib/pdag_writer.mjs';
@@ -250,6 +253,17 @@ describe('geometry stream versions', () => {
     }
     cutsAndFlipsFailCleanly(seed('leaves_table.bin'), 6, () => true);
   });
+  // Version 7 (coder 3 with prefix-coded references, the tiles' stream since fixship): the same DAG,
+  // and cut or flipped it fails cleanly too (C++: DagStream.PrefixCodedReferencesRoundTrip).
+  test('coder 3 version 7 decodes to the same DAG, and cut or flipped fails cleanly', () => {
+    for (const mode of ['leaves', 'mipmap']) {
+      const stream = seed(`${mode}_table_v7.bin`);
+      assert.equal(stream[0], 7);
+      assert.equal(stream[1], 3);
+      assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
+    }
+    cutsAndFlipsFailCleanly(seed('leaves_table_v7.bin'), 7, () => true);
+  });
   // Version 5 merges the slots it decodes: a cut or flipped stream must still end in a PdagError or
   // in some valid DAG, never in an exception of another kind.
   test('version 5 cut or flipped fails cleanly', () => {
@@ -292,5 +306,46 @@ describe('color stream versions', () => {
         assert.throws(() => decodeBlockColors(spatial.subarray(3), count), PdagError);
       }
     }
+  });
+  // Version 6 (tiles: weights in groups, fixed codes): the version 2 seeds' colors; version 5 (never
+  // released) is refused; every cut and 400 flips end in a PdagError or colors.
+  test('vbr and fixed3 version 6 decode to the same colors, and cut or flipped fail cleanly', () => {
+    const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/${name}`, import.meta.url)));
+    for (const name of ['color_vbr/vbrquality34coderzstd', 'color_fixed3/fixed3quality34']) {
+      const v2 = seed(`${name}_v2.bin`);
+      const v6 = seed(`${name}_v6.bin`);
+      const count = v2[0] | (v2[1] << 8) | (v2[2] << 16);
+      assert.equal(v6[3], 6);
+      const stream = v6.subarray(3);
+      assert.deepEqual(decodeBlockColors(stream, count), decodeBlockColors(v2.subarray(3), count));
+      const five = stream.slice();
+      five[0] = 5;
+      assert.throws(() => decodeBlockColors(five, count), PdagError);
+      for (let length = 0; length < stream.length; ++length) {
+        assert.notEqual(outcome((b) => decodeBlockColors(b, count), stream.subarray(0, length), `cut at ${length}`).code, 'ok');
+      }
+      const next = prng(6);
+      for (let trial = 0; trial < 400; ++trial) {
+        const flipped = stream.slice();
+        flipped[next(flipped.length)] ^= 1 << next(8);
+        outcome((b) => decodeBlockColors(b, count), flipped, `flip ${trial}`);
+      }
+    }
+  });
+});
+
+// The JavaScript copy of version 6's fixed codes is the normative table byte for byte, and the table
+// is the one whose SHA-256 the spec gives (C++: FixedWeightCodes.AreTheNormativeTable).
+describe('block color stream version 6 codes', () => {
+  test('are proto/tables/block_weight_codes_v6.txt', () => {
+    const table = readFileSync(new URL('../../proto/tables/block_weight_codes_v6.txt', import.meta.url), 'utf8');
+    assert.equal(FIXED_WEIGHT_CODES_TEXT, table, 'regenerate: weight_codes_trainer emit (tools/weight_codes_trainer.cc)');
+    const spec = readFileSync(new URL('../../proto/PDAG_FORMAT.md', import.meta.url), 'utf8');
+    const sha = createHash('sha256').update(table).digest('hex');
+    assert.ok(spec.includes(`SHA-256 \`${sha}\``), `the spec's SHA-256 of the table is not ${sha}`);
+    const codes = fixedWeightCodeLengths(table);
+    let lengths = 0;
+    for (let bits = 1; bits <= 4; ++bits) for (const code of codes[bits]) lengths += code.filter((l) => l > 0).length;
+    assert.equal(lengths, 6976);
   });
 });

@@ -13,6 +13,8 @@
 #include <string>
 
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/fixed_weight_codes.h"
+#include "pointdag/color/prefix_weights.h"
 #include "pointdag/color/weight_choice.h"
 #include "pointdag/color/weight_mixer.h"
 #include "pointdag/entropy/varint.h"
@@ -282,22 +284,22 @@ StatusOr<std::vector<ColorBlock>> EncodeBlocks(std::span<const Rgb8> colors, Blo
 StatusOr<std::vector<uint8_t>> SerializeBlocks(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                BlockLayout layout, std::span<const uint64_t> morton,
                                                std::vector<Rgb8>* decoded, std::span<const uint8_t> weights) {
-  return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kFirstSpatialVersion - 1 : kBlockStreamVersion,
-                                  morton, decoded, weights);
+  return SerializeBlocksAsVersion(colors, blocks, layout, morton.empty() ? kPlainVersion : kMixedVersion, morton, decoded, weights);
 }
 
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                         BlockLayout layout, uint8_t version, std::span<const uint64_t> morton,
                                                         std::vector<Rgb8>* decoded, std::span<const uint8_t> chosen) {
-  if (version < 1 || version > kBlockStreamVersion) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
-  if (version >= kFirstSpatialVersion && morton.size() != colors.size()) {
+  if (!IsBlockStreamVersion(version)) return InvalidArgument("color stream version " + std::to_string(version) + " is unknown");
+  if (HasSpatialContexts(version) && morton.size() != colors.size()) {
     return InvalidArgument("color stream version " + std::to_string(version) + " needs one Morton code per color");
   }
   if (!chosen.empty() && chosen.size() != colors.size()) return InvalidArgument("chosen weights must be one per color");
   const DifferenceCode code{version >= 2};
-  const bool mixed = version >= kFirstMixedVersion;
+  const bool mixed = version == kMixedVersion;
+  const bool grouped = version == kFixedWeightCodesVersion;
   std::optional<WeightContexts> spatial;
-  if (version >= kFirstSpatialVersion) spatial.emplace(morton);
+  if (HasSpatialContexts(version)) spatial.emplace(morton);
   std::vector<uint8_t> out = {version, static_cast<uint8_t>(layout), 0, 0};
   PutVarint(out, colors.size());
   PutVarint(out, blocks.size());
@@ -305,6 +307,8 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
   std::optional<WeightMixer> mixer;
   if (mixed) mixer.emplace();
   BinaryRangeEncoder rc;
+  BitWriter groups;  // version 6: the weights' groups, after the range-coded section
+  std::vector<uint8_t> block_groups;
   uint64_t next = 0;
   int prev_bits = 0;
   Rgb8 prev_a{};
@@ -347,12 +351,21 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
       }
       std::array<Rgb8, 1 << kMaxWeightBits> palette;  // Interpolate divides by a run-time 2^bits - 1: once per weight value
       for (uint32_t w = 0; w < (1u << b.bits); ++w) palette[w] = Interpolate(b.ends, w, b.bits);
+      if (grouped) {
+        block_groups.clear();
+        AppendWeightGroups(block_weights.first(b.length), b.bits, block_groups);
+        const std::vector<PrefixEncoder>& codes = FixedWeightGroupCodes().encoders[b.bits];
+        const int per = WeightsPerGroup(b.bits);
+        for (size_t g = 0; g < block_groups.size(); ++g) {
+          codes[g ? block_weights[g * per - 1] : 1 << b.bits].Put(groups, block_groups[g]);
+        }
+      }
       uint32_t prev_w = 16;
       for (uint32_t i = b.start; i < b.start + b.length; ++i) {
         const uint32_t w = block_weights[i - b.start];
         if (mixed) {
           mixer->Encode(rc, b.bits, {spatial->Position(i, b.ends, b.bits, true), prev_w}, w);
-        } else {
+        } else if (!grouped) {
           const uint32_t context = spatial ? spatial->Of(i, b.ends, b.bits, prev_w) : prev_w;
           EncodeBitTree<kMaxWeightBits>(rc, models->weight[b.bits][context], w, b.bits);
         }
@@ -369,7 +382,15 @@ StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> co
     prev_a = b.ends.a;
   }
   if (next != colors.size()) return Internal("color blocks do not cover the colors");
-  const auto payload = rc.Finish();
+  std::vector<uint8_t> payload = rc.Finish();
+  if (grouped) {  // the range-coded section's length, the section, then the groups
+    std::vector<uint8_t> sections;
+    PutVarint(sections, payload.size());
+    sections.insert(sections.end(), payload.begin(), payload.end());
+    const std::vector<uint8_t> group_bytes = groups.Finish();
+    sections.insert(sections.end(), group_bytes.begin(), group_bytes.end());
+    payload = std::move(sections);
+  }
   PutVarint(out, payload.size());  // a range decoder may not miss its last bytes: cuts must show
   out.insert(out.end(), payload.begin(), payload.end());
   return out;

@@ -87,6 +87,9 @@ class BlockColorDecoder {
   void Decode(uint64_t begin, uint64_t end, Rgb8* out) const;  // colors [begin, end)
   std::vector<Rgb8> DecodeAll() const;
   size_t ResidentBytes() const;
+  // A block's weight width and its weights, one per color (inspection, e.g. tools/weight_codes_trainer.cc).
+  int BlockBits(size_t block) const { return bits_[block]; }
+  std::vector<uint8_t> BlockWeights(size_t block) const;
 
  private:
   uint32_t Weight(uint64_t bit_offset, int bits) const;

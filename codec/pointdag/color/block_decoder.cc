@@ -8,6 +8,8 @@
 #include <string>
 
 #include "pointdag/color/block_stream.h"
+#include "pointdag/color/fixed_weight_codes.h"
+#include "pointdag/color/prefix_weights.h"
 #include "pointdag/color/weight_mixer.h"
 #include "pointdag/entropy/varint.h"
 
@@ -83,9 +85,10 @@ void DecodePlainWeights(BinaryRangeDecoder& rc, std::span<BitTreeModel<kMaxWeigh
 StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> stored, uint64_t expected_count,
                                                     std::span<const uint64_t> morton) {
   if (stored.size() < 4) return Truncated("color stream is shorter than its header");
-  if (stored[0] < 1 || stored[0] > kBlockStreamVersion) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
+  if (!IsBlockStreamVersion(stored[0])) return Corrupt("color stream version " + std::to_string(stored[0]) + " is unknown");
   const DifferenceCode code{stored[0] >= 2};
-  const bool mixed = stored[0] >= kFirstMixedVersion;
+  const bool mixed = stored[0] == kMixedVersion;
+  const bool grouped = stored[0] == kFixedWeightCodesVersion;
   const auto layout = static_cast<BlockLayout>(stored[1]);
   if (layout != BlockLayout::kFixedRate && layout != BlockLayout::kVariableRate) return Corrupt("color stream layout is unknown");
   size_t pos = 4;
@@ -97,7 +100,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   if (payload_size != stored.size() - pos) return Truncated("color stream is not as long as its header says");
   if (count != expected_count) return Corrupt("color stream holds " + std::to_string(count) + " colors, expected " + std::to_string(expected_count));
   if (count > 0xFFFFFFFFull || blocks > count || (count > 0 && blocks == 0)) return Corrupt("color stream block count is impossible");
-  const bool spatial_contexts = stored[0] >= kFirstSpatialVersion;
+  const bool spatial_contexts = HasSpatialContexts(stored[0]);
   if (spatial_contexts && morton.size() != count) {
     return Corrupt("color stream has spatial contexts, but there are no voxels' Morton codes for them");
   }
@@ -116,7 +119,19 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
   auto models = std::make_unique<BlockModels>();
   std::optional<WeightMixer> mixer;
   if (mixed) mixer.emplace();
-  BinaryRangeDecoder rc(stored.subspan(pos));
+  // Version 6: the range-coded section's length, the section, then the weights' groups.
+  std::span<const uint8_t> ranged = stored.subspan(pos), group_bytes;
+  if (grouped) {
+    size_t at = 0;
+    uint64_t ranged_size = 0;
+    if (!GetVarint(ranged, at, ranged_size)) return Truncated("color stream ends inside its section length");
+    if (ranged_size > ranged.size() - at) return Truncated("color stream is shorter than its section length says");
+    group_bytes = ranged.subspan(at + ranged_size);
+    ranged = ranged.subspan(at, ranged_size);
+  }
+  BinaryRangeDecoder rc(ranged);
+  PrefixDecoder groups(group_bytes);
+  const FixedWeightCodes* codes = grouped ? &FixedWeightGroupCodes() : nullptr;
   // An endpoint difference (dR, dG, dB) from its three coded components.
   const auto decode_difference = [&](std::array<GammaModel, 3>& m) {
     std::array<int, 3> components{};
@@ -165,7 +180,12 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
     std::array<Rgb8, 1 << kMaxWeightBits> palette;
     uint32_t interpolated = 0;  // a bit per weight
     if (bits) d.weights_.resize((weight_bits + uint64_t{length} * static_cast<uint64_t>(bits) + 63) / 64 + 1, 0);
-    if (!mixed && !spatial && bits) {
+    if (grouped && bits) {
+      if (!DecodeWeightGroups(groups, codes->tables[bits].data(), bits, length, d.weights_.data(), weight_bits)) {
+        return Corrupt("color weight group is no code, or sets bits past its block");
+      }
+      weight_bits += uint64_t{length} * static_cast<uint64_t>(bits);
+    } else if (!mixed && !spatial && bits) {
       const std::span<BitTreeModel<kMaxWeightBits>> plain(models->weight[bits]);
       switch (bits) {
         case 1: DecodePlainWeights<1>(rc, plain, length, d.weights_.data(), weight_bits); break;
@@ -194,7 +214,7 @@ StatusOr<BlockColorDecoder> BlockColorDecoder::Open(std::span<const uint8_t> sto
       prev_w = w;
     }
     for (uint32_t i = 0; spatial && !bits && i < length; ++i) spatial->Record(next + i, ends.a);
-    if (rc.overrun()) return Truncated("color stream is cut short");
+    if (rc.overrun() || groups.overrun()) return Truncated("color stream is cut short");
     next += length;
     prev_bits = bits;
     prev_a = ends.a;
@@ -250,6 +270,13 @@ std::vector<Rgb8> BlockColorDecoder::DecodeAll() const {
   std::vector<Rgb8> colors(count_);
   Decode(0, count_, colors.data());
   return colors;
+}
+
+std::vector<uint8_t> BlockColorDecoder::BlockWeights(size_t block) const {
+  const uint64_t end = block + 1 < starts_.size() ? starts_[block + 1] : count_;
+  std::vector<uint8_t> weights(bits_[block] ? end - starts_[block] : 0);
+  for (size_t i = 0; i < weights.size(); ++i) weights[i] = static_cast<uint8_t>(Weight(weight_offsets_[block] + i * bits_[block], bits_[block]));
+  return weights;
 }
 
 size_t BlockColorDecoder::ResidentBytes() const {

@@ -18,11 +18,17 @@ namespace pointdag {
 // Version 2 codes the endpoint differences decorrelated (DifferenceCode below); version 3 (leaf mode,
 // colors one per voxel in Morton order) codes the weights with spatial contexts (weight_context.h);
 // version 4 (leaf mode) mixes four models per weight bit (weight_mixer.h) and predicts endpoint A
-// from the block's decoded neighbours (PredictA below). Versions 1 to 3 are still read, and version
-// 2 is still written without the voxels' Morton codes (mipmap colors, whose order is not the voxels').
-constexpr uint8_t kBlockStreamVersion = 4;
-constexpr uint8_t kFirstSpatialVersion = 3;
-constexpr uint8_t kFirstMixedVersion = 4;
+// from the block's decoded neighbours (PredictA below); version 6 (tiles, which every client decodes
+// on every view) is version 2 with its weights in groups, each read by one lookup in a prefix code
+// fixed in the format (prefix_weights.h, fixed_weight_codes.h). Version 5 was never released and is
+// refused. Files write version 4 (with the voxels' Morton codes) or 2 (mipmap colors, whose order is
+// not the voxels'); tiles write version 6 (TilingOptions); 1 and 3 are still read.
+constexpr uint8_t kBlockStreamVersion = 6;  // the newest
+constexpr uint8_t kPlainVersion = 2;
+constexpr uint8_t kMixedVersion = 4;
+constexpr uint8_t kFixedWeightCodesVersion = 6;
+constexpr bool IsBlockStreamVersion(uint8_t version) { return version >= 1 && version <= kBlockStreamVersion && version != 5; }
+constexpr bool HasSpatialContexts(uint8_t version) { return version == 3 || version == kMixedVersion; }
 
 // Models of the block stream. Contexts: the previous block's width for lengths and widths; the
 // component for endpoint differences (and the width for B - A; version 4: whether A is predicted from
@@ -74,8 +80,8 @@ inline std::array<int, 3> PredictA(const BlockSurroundings& s, const std::array<
   return p;
 }
 
-// SerializeBlocks writing the given stream version (1..4; 3 and 4 need `morton`): older versions stay
-// writable so that tests can check they still decode.
+// SerializeBlocks writing the given stream version (1..4 or 6; 3 and 4 need `morton`): older
+// versions stay writable so that tests can check they still decode.
 StatusOr<std::vector<uint8_t>> SerializeBlocksAsVersion(std::span<const Rgb8> colors, std::span<const ColorBlock> blocks,
                                                         BlockLayout layout, uint8_t version,
                                                         std::span<const uint64_t> morton = {},

@@ -6,6 +6,7 @@
 
 #include "pointdag/color/astc_mapping.h"
 #include "pointdag/color/block_codec.h"
+#include "pointdag/color/block_stream.h"
 #include "pointdag/color/block_target.h"
 #include "pointdag/color/hierarchical_colors.h"
 #include "pointdag/color/lossless_context.h"
@@ -32,10 +33,12 @@ BlockLayout LayoutOf(ColorCodec codec) {
 // that decode (Open's entropy decode with its weight contexts) was 12 % of a lion encode at 38 dB.
 StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
                                           std::span<const uint64_t> judged, ColorCodec codec,
-                                          std::span<const ColorBlock> blocks, double max_mse,
+                                          std::span<const ColorBlock> blocks, double max_mse, uint8_t version,
                                           std::span<const uint8_t> weights = {}) {
   std::vector<Rgb8> decoded;
-  ASSIGN_OR_RETURN(std::vector<uint8_t> stream, SerializeBlocks(colors, blocks, LayoutOf(codec), morton, &decoded, weights));
+  ASSIGN_OR_RETURN(std::vector<uint8_t> stream,
+                   version ? SerializeBlocksAsVersion(colors, blocks, LayoutOf(codec), version, morton, &decoded, weights)
+                           : SerializeBlocks(colors, blocks, LayoutOf(codec), morton, &decoded, weights));
   EncodedColors out;
   out.codec = codec;
   out.max_mse = max_mse;
@@ -48,21 +51,22 @@ StatusOr<EncodedColors> SerializeMeasured(std::span<const Rgb8> colors, std::spa
 
 StatusOr<EncodedColors> EncodeBlocksAt(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
                                        std::span<const uint64_t> judged, ColorCodec codec,
-                                       double max_mse) {
+                                       double max_mse, uint8_t version) {
   ASSIGN_OR_RETURN(const std::vector<ColorBlock> blocks, EncodeBlocks(colors, LayoutOf(codec), max_mse));
-  return SerializeMeasured(colors, morton, judged, codec, blocks, max_mse);
+  return SerializeMeasured(colors, morton, judged, codec, blocks, max_mse, version);
 }
 
 // About one encode (block_target.h); the decoded colors are measured again, and should rounding
 // put them a hair under the target, the exact encode (threshold 0) is stored instead.
 StatusOr<EncodedColors> EncodeBlocksForTarget(std::span<const Rgb8> colors, std::span<const uint64_t> morton,
                                               std::span<const uint64_t> judged, ColorCodec codec,
-                                              double target, std::optional<double> hint) {
+                                              double target, std::optional<double> hint, uint8_t version) {
   ASSIGN_OR_RETURN(const TargetBlocks found, BlocksForTarget(colors, judged, LayoutOf(codec), target, hint));
-  ASSIGN_OR_RETURN(EncodedColors out, SerializeMeasured(colors, morton, judged, codec, found.blocks, found.max_mse, found.weights));
+  ASSIGN_OR_RETURN(EncodedColors out,
+                   SerializeMeasured(colors, morton, judged, codec, found.blocks, found.max_mse, version, found.weights));
   out.encodes = found.encodes;
   if (out.psnr.y >= target) return out;
-  ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, morton, judged, codec, 0));
+  ASSIGN_OR_RETURN(out, EncodeBlocksAt(colors, morton, judged, codec, 0, version));
   out.encodes = found.encodes + 1;
   return out;
 }
@@ -213,11 +217,11 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
     }
     return out;
   }
-  if (!options.target_psnr_y) return EncodeBlocksAt(colors, morton, judged, options.codec, options.max_mse);
+  if (!options.target_psnr_y) return EncodeBlocksAt(colors, morton, judged, options.codec, options.max_mse, options.block_version);
 
   const double target = *options.target_psnr_y;
   if (!std::isfinite(target) || target <= 0) return InvalidArgument("target PSNR must be a positive number of dB");
-  return EncodeBlocksForTarget(colors, morton, judged, options.codec, target, options.threshold_hint);
+  return EncodeBlocksForTarget(colors, morton, judged, options.codec, target, options.threshold_hint, options.block_version);
 }
 
 }  // namespace pointdag

@@ -37,6 +37,9 @@ struct ColorEncodeOptions {
   // Block codecs at a target: a threshold expected near the answer (a sibling tile's), which the
   // encode starts from instead of predicting one on a sample. The target is met either way.
   std::optional<double> threshold_hint = std::nullopt;
+  // Block codecs: the stream version to write (block_stream.h); 0: the newest the colors allow
+  // (4 with the voxels' Morton codes, else 2). Tiles write 6 (weights read by table lookup).
+  uint8_t block_version = 0;
 };
 
 bool IsLossy(ColorCodec codec);

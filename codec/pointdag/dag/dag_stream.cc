@@ -251,9 +251,9 @@ const char* GeometryCoderName(GeometryCoder coder) {
 }
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version) {
-  if (version < 1 || version > kTableStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
-  if ((coder == GeometryCoder::kTable) != (version == kTableStreamVersion)) {
-    return InvalidArgument("geometry coder 3 is stream version 6's, and version 6 is coder 3's");
+  if (version < 1 || version > kPrefixRefsStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
+  if ((coder == GeometryCoder::kTable) != IsTableVersion(version)) {
+    return InvalidArgument("geometry coder 3 is stream versions 6 and 7's, and they are coder 3's");
   }
   RETURN_IF_ERROR(dag.Validate());
   ASSIGN_OR_RETURN(const DagArrays arrays, ToArrays(dag));
@@ -279,7 +279,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
     return sink.Finish(std::move(out));
   }
   if (coder == GeometryCoder::kTable) {
-    TableSink sink(dag.depth);
+    TableSink sink(dag.depth, version == kPrefixRefsStreamVersion);
     WriteSymbols(arrays, sink, dag.depth);
     return sink.Finish(std::move(out));
   }
@@ -290,11 +290,11 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
-  if (bytes[0] < 1 || bytes[0] > kTableStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
+  if (bytes[0] < 1 || bytes[0] > kPrefixRefsStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
   if (bytes[1] > 3) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
-  if ((bytes[1] == 3) != (bytes[0] == kTableStreamVersion)) {
+  if ((bytes[1] == 3) != IsTableVersion(bytes[0])) {
     return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " names coder " + std::to_string(bytes[1]) +
-                   ": coder 3 is version 6's, and version 6 is coder 3's");
+                   ": coder 3 is versions 6 and 7's, and they are coder 3's");
   }
   const auto coder = static_cast<GeometryCoder>(bytes[1]);
   const int depth = bytes[2];
@@ -335,7 +335,7 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
       arrays = ReadSymbols(source, depth, counts);
     } else if (coder == GeometryCoder::kTable) {
       TableSource source;
-      RETURN_IF_ERROR(source.Open(bytes.subspan(pos), depth));
+      RETURN_IF_ERROR(source.Open(bytes.subspan(pos), depth, bytes[0] == kPrefixRefsStreamVersion));
       arrays = ReadSymbols(source, depth, counts);
     } else {
       arrays = DecodeSpatial(bytes.subspan(pos), depth, counts, bytes[0]);

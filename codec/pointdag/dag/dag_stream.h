@@ -38,10 +38,13 @@ const char* GeometryCoderName(GeometryCoder coder);
 // differ only in coder 2, version 3's costing 1.6x the decode time of version 2's, version 4's 1.2x
 // version 3's, version 5's 1.2x version 4's.
 constexpr int kGeometryStreamVersion = 5;
-// Version 6 is coder 3's, and coder 3 is version 6's: readers read 1..6.
+// Versions 6 and 7 are coder 3's, and coder 3 is theirs: readers read 1..7.
 constexpr int kTableStreamVersion = 6;
+// Version 7 (the tiles'): coder 3 with its references in the prefix section (table_coder.h).
+constexpr int kPrefixRefsStreamVersion = 7;
+constexpr bool IsTableVersion(int version) { return version == kTableStreamVersion || version == kPrefixRefsStreamVersion; }
 
-// `version`: 1..kGeometryStreamVersion for coders 0..2, kTableStreamVersion for kTable.
+// `version`: 1..kGeometryStreamVersion for coders 0..2, kTableStreamVersion or kPrefixRefsStreamVersion for kTable.
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version = kGeometryStreamVersion);
 
 // `max_nodes` bounds what a lying header may make the decoder allocate (nodes + bricks).

@@ -8,23 +8,18 @@ namespace {
 // Symbol 0 is never a mask; symbols 1..255 take code lengths.
 constexpr int kFirstSymbol = 1;
 
-// Whether sending the lengths beats 8 bits a mask, by an estimate of the lengths' cost (the choice
-// is the writer's; the stream says which it made).
-bool WorthATable(const std::array<uint64_t, 256>& freq, const std::array<uint8_t, 256>& lengths) {
-  uint64_t plain = 0, coded = 0, used = 0;
-  for (int s = kFirstSymbol; s < 256; ++s) {
-    plain += 8 * freq[s];
-    coded += freq[s] * lengths[s];
-    used += lengths[s] > 0 ? 1 : 0;
-  }
-  return coded + 5 * used + 255 / 2 < plain;
-}
-
 }  // namespace
 
 StatusOr<std::vector<uint8_t>> TableSink::Finish(std::vector<uint8_t> out) {
   std::vector<std::array<uint64_t, 256>> freq(static_cast<size_t>(depth_) + 1);
-  for (const MaskSymbol& m : masks_) ++freq[m.cls][m.mask];
+  std::array<uint64_t, 256> ref_freq{};
+  for (const MaskSymbol& m : masks_) {
+    if (m.bound) {
+      ++ref_freq[RefSymbol(m.v, m.bound)];
+    } else {
+      ++freq[m.cls][m.mask];
+    }
+  }
   BinaryRangeEncoder rc;
   TableModels models(depth_ + 1);
   std::vector<PrefixEncoder> codes;
@@ -33,18 +28,9 @@ StatusOr<std::vector<uint8_t>> TableSink::Finish(std::vector<uint8_t> out) {
   for (int s = kFirstSymbol; s < 256; ++s) plain[s] = 8;
   codes.emplace_back(plain);  // class 0 is never used
   for (int cls = 1; cls <= depth_; ++cls) {
-    const std::array<uint8_t, 256> lengths = PrefixCodeLengths(freq[cls]);
-    const bool coded = WorthATable(freq[cls], lengths);
-    rc.Encode(models.coded, coded ? 1 : 0);
-    if (coded) {
-      int previous = 0;
-      for (int s = kFirstSymbol; s < 256; ++s) {
-        EncodeBitTree<4>(rc, models.length[previous], lengths[s]);
-        previous = lengths[s];
-      }
-    }
-    codes.emplace_back(coded ? lengths : plain);
+    codes.emplace_back(WriteCodeLengths(rc, models.code, freq[cls], kFirstSymbol));
   }
+  const PrefixEncoder ref_code(prefix_refs_ ? WriteCodeLengths(rc, models.code, ref_freq, 0) : plain);
   for (const Event& e : events_) {
     if (e.bound == 0) {
       rc.Encode(models.flag[e.cls], static_cast<int>(e.value));
@@ -54,7 +40,15 @@ StatusOr<std::vector<uint8_t>> TableSink::Finish(std::vector<uint8_t> out) {
   }
   const std::vector<uint8_t> ranged = rc.Finish();
   BitWriter bits;
-  for (const MaskSymbol& m : masks_) codes[m.cls].Put(bits, m.mask);
+  for (const MaskSymbol& m : masks_) {
+    if (!m.bound) {
+      codes[m.cls].Put(bits, m.mask);
+      continue;
+    }
+    const int length = std::bit_width(m.v), rest = length - 1 - std::min(length - 1, 2);
+    ref_code.Put(bits, static_cast<uint8_t>(RefSymbol(m.v, m.bound)));
+    bits.Put(m.v & ((1u << rest) - 1), rest);
+  }
   const std::vector<uint8_t> prefixed = bits.Finish();
   PutVarint(out, ranged.size());
   out.insert(out.end(), ranged.begin(), ranged.end());
@@ -62,7 +56,8 @@ StatusOr<std::vector<uint8_t>> TableSink::Finish(std::vector<uint8_t> out) {
   return out;
 }
 
-Status TableSource::Open(std::span<const uint8_t> payload, int depth) {
+Status TableSource::Open(std::span<const uint8_t> payload, int depth, bool prefix_refs) {
+  prefix_refs_ = prefix_refs;
   size_t pos = 0;
   uint64_t ranged = 0;
   if (!GetVarint(payload, pos, ranged)) return Truncated("geometry stream ends inside its section length");
@@ -73,14 +68,14 @@ Status TableSource::Open(std::span<const uint8_t> payload, int depth) {
   tables_.resize(static_cast<size_t>(depth) + 1);
   std::array<uint8_t, 256> lengths{};
   for (int cls = 1; cls <= depth; ++cls) {
-    const bool coded = rc_->Decode(models_->coded) != 0;
-    int previous = 0;
-    for (int s = kFirstSymbol; s < 256; ++s) {
-      lengths[s] = static_cast<uint8_t>(coded ? DecodeBitTree<4>(*rc_, models_->length[previous]) : 8);
-      if (lengths[s] > kPrefixCodeBits) return Corrupt("geometry stream holds a mask code longer than 12 bits");
-      previous = lengths[s];
+    if (!ReadCodeLengths(*rc_, models_->code, kFirstSymbol, lengths).ok()) {
+      return Corrupt("geometry stream holds a mask code longer than 12 bits");
     }
     RETURN_IF_ERROR(BuildPrefixTable(lengths, tables_[cls]));
+  }
+  if (prefix_refs) {
+    if (!ReadCodeLengths(*rc_, models_->code, 0, lengths).ok()) return Corrupt("geometry stream holds a reference code longer than 12 bits");
+    RETURN_IF_ERROR(BuildPrefixTable(lengths, ref_table_));
   }
   if (rc_->overrun()) return Truncated("geometry stream ends inside its code tables");
   return Status::Ok();

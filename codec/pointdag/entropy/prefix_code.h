@@ -61,6 +61,17 @@ class PrefixDecoder {
     pos_ += e >> 8;
     return (e >> 8) ? (e & 0xFF) : -1;
   }
+  // `n` (0..31) raw bits, most significant first.
+  uint32_t Bits(int n) {
+    uint32_t v = 0;
+    for (; n > 0;) {
+      const int take = n < kPrefixCodeBits ? n : kPrefixCodeBits;
+      v = v << take | Peek() >> (kPrefixCodeBits - take);
+      pos_ += static_cast<uint64_t>(take);
+      n -= take;
+    }
+    return v;
+  }
   bool overrun() const { return pos_ > 8 * bytes_.size(); }
 
  private:

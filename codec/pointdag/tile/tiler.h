@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointdag/color/block_stream.h"
 #include "pointdag/container/json_fields.h"
 #include "pointdag/pipeline.h"
 
@@ -37,9 +38,12 @@ struct TilingOptions {
   // Tiles are decoded by every client on every view: they take geometry coder 3 (stream version 6),
   // whose masks decode by table lookup, 2.4-3.2x the tile decode rate of coder 2 version 2 for
   // 10-15 % more tile bytes (docs/benchmarks.md, "Tile stream for decode speed").
+  // Version 7 reads the back-references by table lookup too (IGN 0.1 m: geometry +1.1 %, decode
+  // -2.4 ms of 12.8), and their block colors take stream version 6, whose weights are read a group at
+  // a time in codes fixed in the format (colors +0..4 %, decode -24 %): docs/benchmarks.md, "fixship".
   GeometryCoder geometry_coder = GeometryCoder::kTable;
-  int geometry_version = kTableStreamVersion;
-  ColorEncodeOptions colors{ColorCodec::kVariableRate, 38.0};
+  int geometry_version = kPrefixRefsStreamVersion;
+  ColorEncodeOptions colors{.codec = ColorCodec::kVariableRate, .target_psnr_y = 38.0, .block_version = kFixedWeightCodesVersion};
   ProgressFn progress;  // (tiles done, tiles total)
 };
 

@@ -7,10 +7,14 @@ import { GAMMA_MODELS, RangeDecoder, bitTreeModels, newModels, unZigZag } from '
 import { readVarint } from './varint.js';
 import { WeightContexts, SPATIAL_WEIGHT_CONTEXTS } from './weight_contexts.js';
 import { WeightMixer } from './weight_mixer.js';
+import { PrefixDecoder } from './prefix_code.js';
+import { readWeightGroups } from './weight_groups.js';
 
-const STREAM_VERSION = 4;  // 1 to 3 still read
-const FIRST_SPATIAL_VERSION = 3;
-const FIRST_MIXED_VERSION = 4;
+// Versions 1 to 4 and 6 (tiles: weights in groups, weight_groups.js); 5 was never released.
+const STREAM_VERSION = 6;
+const MIXED_VERSION = 4;
+const FIXED_WEIGHT_CODES_VERSION = 6;
+const hasSpatialContexts = (version) => version === 3 || version === MIXED_VERSION;
 const LAYOUT_FIXED = 1;
 const LAYOUT_VARIABLE = 2;
 const FIXED_BITS = 3;
@@ -38,7 +42,7 @@ const clampByte = (v) => (v < 0 ? 0 : v > 255 ? 255 : v);
 // (leaf mode), else null; version 3 and 4 streams need them. -> Uint8Array(3 * expectedCount), RGB per color.
 export function decodeBlockColors(stored, expectedCount, coords = null) {
   if (stored.length < 4) throw corrupt('color stream is shorter than its header');
-  if (stored[0] < 1 || stored[0] > STREAM_VERSION) throw corrupt(`color stream version ${stored[0]} is unknown`);
+  if (stored[0] < 1 || stored[0] > STREAM_VERSION || stored[0] === 5) throw corrupt(`color stream version ${stored[0]} is unknown`);
   // DifferenceCode of block_stream.h: version 2 codes (dG, dR - dG, dB - dG), version 1 (dR, dG, dB).
   const decorrelated = stored[0] >= 2;
   const differenceBits = decorrelated ? 10 : 9;
@@ -52,7 +56,7 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
   if (payloadSize !== stored.length - cursor.pos) throw corrupt('color stream is not as long as its header says');
   if (count !== expectedCount) throw corrupt(`color stream holds ${count} colors, expected ${expectedCount}`);
   if (count > 0xffffffff || blocks > count || (count > 0 && blocks === 0)) throw corrupt('color stream block count is impossible');
-  const spatialContexts = stored[0] >= FIRST_SPATIAL_VERSION;
+  const spatialContexts = hasSpatialContexts(stored[0]);
   if (spatialContexts && (coords === null || coords.length !== 3 * count)) {
     throw corrupt("color stream has spatial contexts, but there are no voxels' Morton codes for them");
   }
@@ -61,12 +65,23 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
     throw corrupt(`color stream declares ${count} colors, more than its ${payloadSize} bytes can hold`);
   }
 
-  const mixed = stored[0] >= FIRST_MIXED_VERSION;
+  const mixed = stored[0] === MIXED_VERSION;
+  const grouped = stored[0] === FIXED_WEIGHT_CODES_VERSION;
   const spatial = spatialContexts ? new WeightContexts(coords) : null;
   const mixer = mixed ? new WeightMixer() : null;
   const near = new Int32Array(4);  // the block's surroundings: weighted R, G, B sums and weight
   const p = newModels(MODEL_COUNT);
-  const rc = new RangeDecoder(stored, cursor.pos);
+  // Version 6: the range-coded section's length, the section, then the weights' groups.
+  let rangedEnd = stored.length;
+  if (grouped) {
+    const ranged = readVarint(stored, cursor);
+    if (ranged < 0) throw corrupt('color stream ends inside its section length');
+    if (ranged > stored.length - cursor.pos) throw corrupt('color stream is shorter than its section length says');
+    rangedEnd = cursor.pos + ranged;
+  }
+  const rc = new RangeDecoder(stored, cursor.pos, rangedEnd);
+  const groups = grouped ? new PrefixDecoder(stored, rangedEnd, stored.length) : null;
+  const blockWeights = grouped ? new Uint8Array(MACRO_BLOCK) : null;
   let out = new Uint8Array(3 * Math.min(count, 4 * MACRO_BLOCK));
   const palette = new Uint8Array(3 * 16);
   let next = 0;
@@ -133,10 +148,13 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
         palette[3 * w + 2] = ((ab * (m - w) + bb * w + (m >> 1)) / m) | 0;
       }
       const wBase = WEIGHT_BASE + bits * WEIGHT_CONTEXTS * WEIGHT_TREE;
+      if (grouped) readWeightGroups(groups, bits, length, blockWeights);
       let prevW = 16;
       for (let i = 0; i < length; ++i, o += 3) {
         let w;
-        if (mixed) {
+        if (grouped) {
+          w = blockWeights[i];
+        } else if (mixed) {
           w = mixer.decode(rc, bits, spatial.position(next + i, out, ar, ag, ab, br, bg, bb, bits, true), prevW);
         } else {
           const context = spatial ? spatial.of(next + i, out, ar, ag, ab, br, bg, bb, bits, prevW) : prevW;
@@ -148,7 +166,7 @@ export function decodeBlockColors(stored, expectedCount, coords = null) {
         prevW = w;
       }
     }
-    if (rc.overrun()) throw corrupt('color stream is cut short');
+    if (rc.overrun() || (grouped && groups.overrun())) throw corrupt('color stream is cut short');
     next += length;
     prevBits = bits;
     pr = ar;

@@ -17,9 +17,11 @@ export const MAX_DEPTH = 21;
 export const COUNT_LEAVES = 0;
 export const COUNT_MIPMAP = 1;
 
-// Versions 2..5 change coder 2 only; versions 1..4 still decode; version 6 is coder 3's.
+// Versions 2..5 change coder 2 only; versions 1..4 still decode; versions 6 and 7 are coder 3's.
 const STREAM_VERSION = 5;
 const TABLE_STREAM_VERSION = 6;
+const PREFIX_REFS_STREAM_VERSION = 7;  // coder 3, references in the prefix section
+const isTableVersion = (v) => v === TABLE_STREAM_VERSION || v === PREFIX_REFS_STREAM_VERSION;
 const CODER_ZSTD = 0;
 const CODER_CONTEXT = 1;
 const CODER_SPATIAL = 2;
@@ -72,24 +74,39 @@ class ContextMasks {
   }
 }
 
+// A code's lengths from `rc` as code_lengths.cc ReadCodeLengths reads them (symbols first..255).
+function readCodeLengths(rc, p, first, what) {
+  const lengths = new Uint8Array(256);
+  const coded = rc.bit(p, TABLE_CODED);
+  let previous = 0;
+  for (let s = first; s < 256; ++s) {
+    lengths[s] = coded ? rc.bitTree(p, LENGTH_BASE + previous * bitTreeModels(4), 4) : 8;
+    if (lengths[s] > PREFIX_CODE_BITS) throw corrupt(`geometry stream holds a ${what} code longer than 12 bits`);
+    previous = lengths[s];
+  }
+  return lengths;
+}
+
 // Coder 3's masks: a canonical prefix code per class 1..depth, its lengths read from `rc` (the
-// range-coded section) as table_coder.cc writes them; the masks follow the section.
+// range-coded section) as table_coder.cc writes them; the masks follow the section. Version 7: then
+// the references' code, the references read from the prefix section too (TableSource::Ref).
 class TableMasks {
-  constructor(rc, p, bytes, start, depth) {
+  constructor(rc, p, bytes, start, depth, prefixRefs) {
     this.tables = [null];
-    const lengths = new Uint8Array(256);
-    for (let cls = 1; cls <= depth; ++cls) {
-      const coded = rc.bit(p, TABLE_CODED);
-      let previous = 0;
-      for (let s = 1; s < 256; ++s) {
-        lengths[s] = coded ? rc.bitTree(p, LENGTH_BASE + previous * bitTreeModels(4), 4) : 8;
-        if (lengths[s] > PREFIX_CODE_BITS) throw corrupt('geometry stream holds a mask code longer than 12 bits');
-        previous = lengths[s];
-      }
-      this.tables.push(buildPrefixTable(lengths));
-    }
+    for (let cls = 1; cls <= depth; ++cls) this.tables.push(buildPrefixTable(readCodeLengths(rc, p, 1, 'mask')));
+    this.refTable = prefixRefs ? buildPrefixTable(readCodeLengths(rc, p, 0, 'reference')) : null;
     if (rc.overrun()) throw corrupt('geometry stream ends inside its code tables');
     this.bits = new PrefixDecoder(bytes, start, bytes.length);
+  }
+  // Version 7: a reference below `bound` (k + 1 = v as its length class and two top bits, then the
+  // rest raw), or `bound` where the symbol is no code or no length class of `bound`.
+  ref(bound) {
+    const s = this.bits.get(this.refTable);
+    const length = bitWidth(bound) - (s >> 2);
+    const top = Math.min(length - 1, 2);
+    if (s < 0 || length < 1 || (s & 3) >> top) return bound;
+    const high = (1 << top) | (s & 3);
+    return high * 2 ** (length - 1 - top) + this.bits.bits(length - 1 - top) - 1;
   }
   mask(cls) {
     const s = this.bits.get(this.tables[cls]);
@@ -114,6 +131,7 @@ function readSymbols(rc, p, source, depth, mode, counts) {
     const flagModel = FLAG_BASE + cls;
     const refBase = REF_BASE + cls * GAMMA_MODELS;
     const nextCount = counts[level + 1];
+    const prefixRefs = source.refTable != null;
     let seen = 0;
     for (let i = 0; i < n; ++i) {
       const mask = source.mask(cls);
@@ -123,7 +141,7 @@ function readSymbols(rc, p, source, depth, mode, counts) {
       for (let c = POPCOUNT8[mask]; c > 0; --c) {
         let k;
         if (seen > 0 && rc.bit(p, flagModel)) {
-          k = rc.gamma(p, refBase, bitWidth(seen)) - 1;
+          k = prefixRefs ? source.ref(seen) : rc.gamma(p, refBase, bitWidth(seen)) - 1;
           if (k >= seen) throw corrupt('geometry stream refers to a node not yet seen');
         } else {
           k = seen++;
@@ -208,10 +226,10 @@ function addCounts(dag) {
 // `maxNodes` bounds what a lying level table may make the decoder allocate (nodes + bricks).
 export function decodeDag(bytes, maxNodes) {
   if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
-  if (!(bytes[0] >= 1 && bytes[0] <= TABLE_STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
+  if (!(bytes[0] >= 1 && bytes[0] <= PREFIX_REFS_STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
   if (bytes[1] > CODER_TABLE) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
-  if ((bytes[1] === CODER_TABLE) !== (bytes[0] === TABLE_STREAM_VERSION)) {
-    throw corrupt(`geometry stream version ${bytes[0]} names coder ${bytes[1]}: coder 3 is version 6's, and version 6 is coder 3's`);
+  if ((bytes[1] === CODER_TABLE) !== isTableVersion(bytes[0])) {
+    throw corrupt(`geometry stream version ${bytes[0]} names coder ${bytes[1]}: coder 3 is versions 6 and 7's, and they are coder 3's`);
   }
   const depth = bytes[2];
   if (depth < 2 || depth > MAX_DEPTH) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);
@@ -246,7 +264,7 @@ export function decodeDag(bytes, maxNodes) {
     const end = cursor.pos + section;
     const rc = new RangeDecoder(bytes, cursor.pos, end);
     const p = newModels(TABLE_MODEL_COUNT);
-    dag = readSymbols(rc, p, new TableMasks(rc, p, bytes, end, depth), depth, mode, counts);
+    dag = readSymbols(rc, p, new TableMasks(rc, p, bytes, end, depth, bytes[0] === PREFIX_REFS_STREAM_VERSION), depth, mode, counts);
   } else {
     const rc = new RangeDecoder(bytes, cursor.pos);
     if (bytes[1] === CODER_CONTEXT) {

@@ -41,14 +41,29 @@ export class PrefixDecoder {
   }
   // The next symbol, or -1 at a bit pattern that is no code.
   get(table) {
+    const e = table.entries[this.peek() >>> (PREFIX_CODE_BITS - table.bits)];
+    this.pos += e >>> 8;
+    return e >>> 8 ? e & 0xff : -1;
+  }
+  // `n` (0..31) raw bits, most significant first (PrefixDecoder::Bits).
+  bits(n) {
+    let v = 0;
+    while (n > 0) {
+      const take = Math.min(n, PREFIX_CODE_BITS);
+      v = (v * (1 << take)) + (this.peek() >>> (PREFIX_CODE_BITS - take));
+      this.pos += take;
+      n -= take;
+    }
+    return v;
+  }
+  // The next 12 bits, zeros past the end.
+  peek() {
     const { bytes, end } = this;
     const at = this.start + (this.pos >>> 3);
     const v = at + 3 <= end
       ? (bytes[at] << 16) | (bytes[at + 1] << 8) | bytes[at + 2]
       : ((at < end ? bytes[at] : 0) << 16) | ((at + 1 < end ? bytes[at + 1] : 0) << 8) | (at + 2 < end ? bytes[at + 2] : 0);
-    const e = table.entries[((v >>> (12 - (this.pos & 7))) & PEEK_MASK) >>> (PREFIX_CODE_BITS - table.bits)];
-    this.pos += e >>> 8;
-    return e >>> 8 ? e & 0xff : -1;
+    return (v >>> (12 - (this.pos & 7))) & PEEK_MASK;
   }
   overrun() {
     return this.pos > 8 * (this.end - this.start);
