@@ -107,7 +107,9 @@ TEST(FixedWeightCodes, CutsAndFlipsFailCleanly) {
     auto flipped = stream;
     flipped[rng() % flipped.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
     const auto decoded = BlockColorDecoder::Open(flipped, colors.size());
-    if (decoded.ok()) EXPECT_EQ(decoded->DecodeAll().size(), colors.size());
+    if (decoded.ok()) {
+      EXPECT_EQ(decoded->DecodeAll().size(), colors.size());
+    }
   }
 }
 
