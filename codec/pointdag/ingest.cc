@@ -63,7 +63,7 @@ void RetainFreedMemory() {
 TilingOptions IngestTilingOptions(int tile_depth, std::optional<double> quality_db) {
   TilingOptions tiling;
   tiling.tile_depth = tile_depth;
-  tiling.colors = {ColorCodec::kVariableRate, quality_db.value_or(38.0)};
+  tiling.colors.target_psnr_y = quality_db.value_or(38.0);  // vbr, block stream version 6: TilingOptions' own
   return tiling;
 }
 

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "pointdag/color/color_metrics.h"
+#include "pointdag/ingest.h"
 #include "pointdag/tile/tiler.h"
 #include "pointdag/voxelize/morton.h"
 #include "test_util.h"
@@ -65,6 +66,11 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
   EXPECT_EQ(options.geometry_coder, GeometryCoder::kTable);
   EXPECT_EQ(options.geometry_version, kPrefixRefsStreamVersion);
   EXPECT_EQ(options.colors.block_version, kFixedWeightCodesVersion);
+  // What the daemon and `pointdag export` tile with keeps those streams, at any quality.
+  const TilingOptions ingest = IngestTilingOptions(8, 34.0);
+  EXPECT_EQ(ingest.geometry_version, kPrefixRefsStreamVersion);
+  EXPECT_EQ(ingest.colors.block_version, kFixedWeightCodesVersion);
+  EXPECT_EQ(ingest.colors.target_psnr_y, 34.0);
   auto set = BuildTiles(finest, ScanInfo{}, "surface", options);
   ASSERT_TRUE(set.ok()) << set.status().ToString();
   EXPECT_EQ(set->levels, 3);
