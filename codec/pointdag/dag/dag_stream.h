@@ -17,8 +17,9 @@
 //   mixes three models per mask bit (mask_mixer.h), version 4 five, version 5 five others with a
 //   secondary estimate (mask_mixer5.h) and codes the nodes of heights 3 and 4 at every occurrence
 //   too (slot_merge.h); decoding about 6x slower than kContext;
-// - kTable (stream version 6, tiles): the symbols of kZstd and kContext, each mask by table lookup
-//   in a prefix code per height, flags and references range-coded (table_coder.h).
+// - kTable (stream versions 6 and 7, tiles): the symbols of kZstd and kContext, each mask by table
+//   lookup in a prefix code per height, flags range-coded, references range-coded (6) or prefix-coded
+//   (7) (table_coder.h).
 // DecodeDag() runs in linear time (in the stored DAG plus its brick occurrences) and returns the
 // identical resident DAG.
 #pragma once

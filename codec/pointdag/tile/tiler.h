@@ -35,9 +35,9 @@ struct Tile {
 
 struct TilingOptions {
   int tile_depth = 8;
-  // Tiles are decoded by every client on every view: they take geometry coder 3 (stream version 6),
-  // whose masks decode by table lookup, 2.4-3.2x the tile decode rate of coder 2 version 2 for
-  // 10-15 % more tile bytes (docs/benchmarks.md, "Tile stream for decode speed").
+  // Tiles are decoded by every client on every view: they take geometry coder 3, whose masks decode
+  // by table lookup, 2.4-3.2x the tile decode rate of coder 2 version 2 for 10-15 % more tile bytes
+  // (docs/benchmarks.md, "Tile stream for decode speed").
   // Version 7 reads the back-references by table lookup too (IGN 0.1 m: geometry +1.1 %, decode
   // -2.4 ms of 12.8), and their block colors take stream version 6, whose weights are read a group at
   // a time in codes fixed in the format (colors +0..4 %, decode -24 %): docs/benchmarks.md, "fixship".
