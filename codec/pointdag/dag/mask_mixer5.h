@@ -120,8 +120,8 @@ class MaskMixer5 {
   std::vector<uint16_t> apm_;
   // Version 5: the neighbour model starts trusted alone at 1, the others at 0.3 (the bias at 0).
   // Version 8: at 0.3 and 0.2: young models' first estimates are confident (3/4 after one bit), and
-  // their sum at 2.2 overshot until the weights had learnt (tiny −31 bytes, 1.8 %; the big scans
-  // −0.02..−0.2 %; docs/benchmarks.md "Small scans' geometry").
+  // their sum at 2.2 overshot until the weights had learnt (tiny at 8 ft −31 bytes, −1.8 %; the
+  // six other cases of bench --versus −0.01..−0.27 %; docs/benchmarks.md "Small scans' geometry").
   std::array<std::array<int32_t, 6>, 16> weights_ = [] {
     std::array<std::array<int32_t, 6>, 16> t{};
     t.fill({65536, 19661, 19661, 19661, 19661, 0});
