@@ -194,6 +194,8 @@ describe('hostile tiles', () => {
     const withSection = (tag, change) => framePdag(sections.map(([name, d]) => [name, name === tag ? change(d.slice()) : d]));
     assert.equal(both(framePdag(sections, { major: 2 }), 'major version 2').code, 'Unsupported');
     assert.equal(both(withSection('geometry', (g) => { g[1] = 0; return g; }), 'zstd geometry').code, 'Unsupported');
+    // Version 8's second byte is its depth and mode: 0 there is a bad depth, not zstd.
+    assert.equal(both(withSection('geometry', (g) => { g[0] = 8; g[1] = 0; return g; }), 'version 8 of depth 0').code, 'Corrupt');
     for (const codec of [1, 4, 5, 6, 7, 8]) {
       assert.equal(both(withSection('colors', (c) => { c[0] = codec; return c; }), `colors codec ${codec}`).code, 'Unsupported');
     }
