@@ -41,6 +41,32 @@ TEST(BinaryRangeCoder, RoundTripsModelledAndDirectBits) {
   EXPECT_FALSE(dec.overrun());
 }
 
+// Version 8's ends: no leading zero byte, and a flush of the fewest bytes, zeros past the end read
+// back as the value flushed; the same bits come back, 4 to 5 bytes fewer than Finish() writes.
+TEST(BinaryRangeCoder, CompactEndsDecodeTheSameBits) {
+  std::mt19937 rng(2);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<int> bits(rng() % 300);
+    for (auto& b : bits) b = (rng() % 16) < 3;
+    BinaryRangeEncoder full, compact;
+    YoungBitModel a[3], b[3];
+    for (size_t i = 0; i < bits.size(); ++i) {
+      full.Encode(a[i % 3], bits[i]);
+      compact.Encode(b[i % 3], bits[i]);
+    }
+    const auto long_form = full.Finish();
+    const auto bytes = compact.FinishCompact();
+    EXPECT_GE(long_form.size() - bytes.size(), 4u);
+    EXPECT_LE(long_form.size() - bytes.size(), 5u);
+    EXPECT_EQ(long_form.at(0), 0);
+    BinaryRangeDecoder dec(bytes, true);
+    YoungBitModel c[3];
+    for (size_t i = 0; i < bits.size(); ++i) ASSERT_EQ(dec.Decode(c[i % 3]), bits[i]) << "trial " << trial << " bit " << i;
+    EXPECT_FALSE(dec.overrun());
+  }
+  EXPECT_TRUE(BinaryRangeEncoder().FinishCompact().empty());
+}
+
 struct StreamCase {
   int depth;
   CountMode mode;
@@ -107,28 +133,31 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
 }
 
 // Versions 1 (coder 2 without edge neighbours), 2 (without the mixer), 3 (without the mixer's
-// sides model) and 4 (before the pattern models and height-3 slots) still decode: the fuzz seeds of
-// tiny at 40 ft in all five versions hold one DAG, version 4 re-encodes byte for byte, and writers
-// write version 5.
-TEST(DagStream, SpatialVersions1To4StillDecode) {
+// sides model), 4 (before the pattern models and height-3 slots) and 5 (before version 8's young
+// flags, weights and compact framing) still decode: the fuzz seeds of tiny at 40 ft in all six
+// versions hold one DAG, versions 3 to 5 re-encode byte for byte, and writers write version 8.
+TEST(DagStream, SpatialVersions1To5StillDecode) {
   const auto read = [](const std::string& name) {
     std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
     return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
   };
   for (const std::string mode : {"leaves", "mipmap"}) {
     std::vector<std::vector<uint8_t>> streams = {read(mode + "_spatial.bin")};
-    for (int version = 2; version <= 5; ++version) streams.push_back(read(mode + "_spatial_v" + std::to_string(version) + ".bin"));
+    for (int version : {2, 3, 4, 5, 8}) streams.push_back(read(mode + "_spatial_v" + std::to_string(version) + ".bin"));
     const Svdag dag = DecodeDag(streams[0]).value();
-    for (int version = 1; version <= 5; ++version) {
-      ASSERT_EQ(streams[version - 1].at(0), version);
-      EXPECT_EQ(DecodeDag(streams[version - 1]).value(), dag) << "version " << version;
+    for (size_t i = 0; i < streams.size(); ++i) {
+      const int version = i < 5 ? static_cast<int>(i) + 1 : 8;
+      ASSERT_EQ(streams[i].at(0), version);
+      EXPECT_EQ(DecodeDag(streams[i]).value(), dag) << "version " << version;
     }
     EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 3).value(), streams[2]);
     EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 4).value(), streams[3]);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), streams[4]);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, 5).value(), streams[4]);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial).value(), streams[5]);
     EXPECT_LT(streams[1].size(), streams[0].size());
     EXPECT_LT(streams[2].size(), streams[1].size());
     EXPECT_LT(streams[4].size(), streams[3].size());  // (version 4 was 4 bytes above 3 on this small scan)
+    EXPECT_EQ(streams[4].size() - streams[5].size(), 43u);  // 804 -> 761 bytes
   }
 }
 
@@ -271,6 +300,28 @@ TEST(DagStream, RejectsLyingHeaders) {
   EXPECT_EQ(DecodeDag(huge).status().code(), StatusCode::kCorrupt);
   EXPECT_EQ(DecodeDag(good, 10).status().code(), StatusCode::kCorrupt);  // caller's own bound
   EXPECT_EQ(DecodeDag(std::vector<uint8_t>{1, 0}).status().code(), StatusCode::kTruncated);
+}
+
+// Version 8's 2-byte header: depth and mode in one byte, its reserved bits zero; without a level
+// table, the caller's bound on nodes is checked as they are decoded.
+TEST(DagStream, Version8RejectsLyingHeaders) {
+  const Svdag dag = Build(9, 8000, 5, CountMode::kMipmap);
+  const auto good = EncodeDag(dag, GeometryCoder::kSpatial).value();
+  ASSERT_EQ(good.at(0), 8);
+  EXPECT_EQ(good.at(1), 9 | 1 << 5);
+  EXPECT_EQ(DecodeDag(good).value(), dag);
+  auto bad = good;
+  bad[1] = 22 | 1 << 5;  // depth
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  bad[1] = 1;
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  bad[1] = 9 | 1 << 6;  // reserved
+  EXPECT_EQ(DecodeDag(bad).status().code(), StatusCode::kCorrupt);
+  EXPECT_EQ(DecodeDag(good, 100).status().code(), StatusCode::kCorrupt);  // caller's own bound
+  EXPECT_EQ(DecodeDag(std::vector<uint8_t>{8}).status().code(), StatusCode::kTruncated);
+  // Coders 0 and 1 have no version 8: asked for it, they write their version 5 stream.
+  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kContext).value(), EncodeDag(dag, GeometryCoder::kContext, 5).value());
+  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, 8).status().code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

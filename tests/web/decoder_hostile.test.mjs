@@ -197,6 +197,8 @@ describe('hostile tiles', () => {
     const withSection = (tag, change) => framePdag(sections.map(([name, d]) => [name, name === tag ? change(d.slice()) : d]));
     assert.equal(both(framePdag(sections, { major: 2 }), 'major version 2').code, 'Unsupported');
     assert.equal(both(withSection('geometry', (g) => { g[1] = 0; return g; }), 'zstd geometry').code, 'Unsupported');
+    // Version 8's second byte is its depth and mode: 0 there is a bad depth, not zstd.
+    assert.equal(both(withSection('geometry', (g) => { g[0] = 8; g[1] = 0; return g; }), 'version 8 of depth 0').code, 'Corrupt');
     for (const codec of [1, 4, 5, 6, 7, 8]) {
       assert.equal(both(withSection('colors', (c) => { c[0] = codec; return c; }), `colors codec ${codec}`).code, 'Unsupported');
     }
@@ -226,16 +228,16 @@ describe('hostile tiles', () => {
 });
 
 // Geometry stream versions 1 (coder 2 without edge neighbours), 2 (without the mixer), 3 (without
-// the mixer's sides model) and 4 (before version 5's pattern models and height-3 and -4 slots) still
-// decode: the fuzz seeds of tiny at 40 ft in all five versions hold one DAG
-// (tests/codec/dag_stream_test.cc checks the same in C++).
+// the mixer's sides model), 4 (before version 5's pattern models and height-3 and -4 slots) and 5
+// (before version 8's young flags, weights and compact framing) still decode: the fuzz seeds of tiny
+// at 40 ft in all six versions hold one DAG (tests/codec/dag_stream_test.cc checks the same in C++).
 describe('geometry stream versions', () => {
   const seed = (name) => new Uint8Array(readFileSync(new URL(`../../fuzz/seeds/dag_stream/${name}`, import.meta.url)));
-  test('coder 2 versions 1 to 5 decode to the same DAG', () => {
+  test('coder 2 versions 1 to 5 and 8 decode to the same DAG', () => {
     for (const mode of ['leaves', 'mipmap']) {
       const v1 = seed(`${mode}_spatial.bin`);
       assert.equal(v1[0], 1);
-      for (let version = 2; version <= 5; ++version) {
+      for (const version of [2, 3, 4, 5, 8]) {
         const stream = seed(`${mode}_spatial_v${version}.bin`);
         assert.equal(stream[0], version);
         assert.deepEqual(decodeDag(stream), decodeDag(v1), `${mode}, version ${version}`);
@@ -271,6 +273,18 @@ describe('geometry stream versions', () => {
     // The range decoder reads up to 4 missing bytes as zeros (every version: the container's CRC
     // catches such a cut), so only a cut of 5 bytes or more must be refused.
     cutsAndFlipsFailCleanly(stream, 5, (length) => length + 5 <= stream.length);
+  });
+  // Version 8 has no level table and drops the zero bytes its decoder infers: a cut decodes on zeros
+  // and must end in a PdagError or some valid DAG; its header's reserved bits and depth are checked.
+  test('version 8 cut, flipped or with a lying header fails cleanly', () => {
+    const stream = seed('leaves_spatial_v8.bin');
+    cutsAndFlipsFailCleanly(stream, 8, (length) => length < 2);
+    for (const header of [9 | 1 << 6, 22, 1]) {
+      const bad = stream.slice();
+      bad[1] = header;
+      assert.throws(() => decodeDag(bad, 2 ** 32), PdagError);
+    }
+    assert.throws(() => decodeDag(stream, 100), PdagError);  // the caller's bound on nodes
   });
 });
 

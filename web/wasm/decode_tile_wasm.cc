@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "pointdag/color/color_codec.h"
+#include "pointdag/dag/spatial_coder.h"
 #include "pointdag/json_text.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/voxelize/morton.h"
@@ -60,7 +61,9 @@ Result* Fail(Result* r, const pointdag::Status& status) {
 }
 
 pointdag::Status RefuseUnsupported(const pointdag::PdagFile& file) {
-  if (file.geometry.size() >= 2 && file.geometry[1] == static_cast<uint8_t>(pointdag::GeometryCoder::kZstd)) {
+  // (Version 8's second byte is its depth and mode, not a coder.)
+  if (file.geometry.size() >= 2 && file.geometry[0] != pointdag::kCompactSpatialVersion &&
+      file.geometry[1] == static_cast<uint8_t>(pointdag::GeometryCoder::kZstd)) {
     return pointdag::Unsupported("the geometry stream is zstd-coded; this decoder reads the range coders only");
   }
   if (file.colors.empty()) return pointdag::Status::Ok();

@@ -1,6 +1,12 @@
 #include "pointdag/container/crc32c.h"
 
 #include <array>
+#include <cstring>
+
+#if defined(__x86_64__) && !defined(__EMSCRIPTEN__)
+#include <nmmintrin.h>
+#define POINTDAG_CRC32C_SSE42 1
+#endif
 
 namespace pointdag {
 namespace {
@@ -21,9 +27,31 @@ constexpr std::array<std::array<uint32_t, 256>, 4> MakeTables() {
 
 constexpr auto kTables = MakeTables();
 
+#ifdef POINTDAG_CRC32C_SSE42
+// SSE 4.2's crc32 instruction computes exactly this polynomial (Castagnoli, reflected), 8 bytes an
+// instruction: a tile's sections are checksummed in a tenth of the table's instructions.
+__attribute__((target("sse4.2"))) uint32_t Crc32cSse42(std::span<const uint8_t> data, uint32_t crc) {
+  uint64_t c = ~crc;
+  size_t i = 0;
+  for (; i + 8 <= data.size(); i += 8) {
+    uint64_t word;
+    std::memcpy(&word, data.data() + i, 8);
+    c = _mm_crc32_u64(c, word);
+  }
+  uint32_t c32 = static_cast<uint32_t>(c);
+  for (; i < data.size(); ++i) c32 = _mm_crc32_u8(c32, data[i]);
+  return ~c32;
+}
+
+const bool kHaveSse42 = __builtin_cpu_supports("sse4.2");
+#endif
+
 }  // namespace
 
 uint32_t Crc32c(std::span<const uint8_t> data, uint32_t crc) {
+#ifdef POINTDAG_CRC32C_SSE42
+  if (kHaveSse42) return Crc32cSse42(data, crc);
+#endif
   crc = ~crc;
   size_t i = 0;
   for (; i + 4 <= data.size(); i += 4) {

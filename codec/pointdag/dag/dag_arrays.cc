@@ -50,52 +50,64 @@ StatusOr<Svdag> FromArrays(const DagArrays& a, int depth, CountMode mode) {
   dag.mode = mode;
   dag.leaves = a.leaves;
   const int levels = dag.internal_levels();
-  // Counts bottom-up, then word addresses and records top-down.
+  const bool mip = mode == CountMode::kMipmap;
+  // Counts bottom-up, then word addresses and records top-down. The last internal level's children
+  // are bricks, counted from their bits; every other level's from the level below.
   std::vector<std::vector<uint64_t>> count(levels);
   for (int level = levels - 1; level >= 0; --level) {
-    count[level].resize(a.masks[level].size());
-    size_t child = 0;
-    for (size_t i = 0; i < a.masks[level].size(); ++i) {
-      uint64_t sum = mode == CountMode::kMipmap ? 1 : 0;
-      for (int c = kByteBits[a.masks[level][i]]; c > 0; --c, ++child) {
-        const uint32_t k = a.children[level][child];
-        if (level + 1 == levels) {
-          sum += mode == CountMode::kMipmap ? BrickMipCount(dag.leaves[k]) : BrickVoxelCount(dag.leaves[k]);
-        } else {
-          sum += count[level + 1][k];
+    const std::vector<uint8_t>& masks = a.masks[level];
+    const uint32_t* child = a.children[level].data();
+    count[level].resize(masks.size());
+    uint64_t* out = count[level].data();
+    if (level + 1 == levels) {
+      for (size_t i = 0; i < masks.size(); ++i) {
+        uint64_t sum = mip ? 1 : 0;
+        for (int c = kByteBits[masks[i]]; c > 0; --c) {
+          const uint64_t brick = dag.leaves[*child++];
+          sum += mip ? BrickMipCount(brick) : BrickVoxelCount(brick);
         }
+        out[i] = sum;
       }
-      count[level][i] = sum;
+    } else {
+      const uint64_t* below = count[level + 1].data();
+      for (size_t i = 0; i < masks.size(); ++i) {
+        uint64_t sum = mip ? 1 : 0;
+        for (int c = kByteBits[masks[i]]; c > 0; --c) sum += below[*child++];
+        out[i] = sum;
+      }
     }
   }
   std::vector<std::vector<uint32_t>> address(levels);
   uint64_t word = 0;
   for (int level = 0; level < levels; ++level) {
     dag.level_offsets.push_back(static_cast<uint32_t>(word));
-    for (uint8_t mask : a.masks[level]) {
-      address[level].push_back(static_cast<uint32_t>(word));
-      word += 1 + static_cast<uint64_t>(kByteBits[mask]);
-      if (word > 0xFFFFFFFFull) return ResourceLimit("decoded DAG exceeds 2^32 node words");
+    address[level].resize(a.masks[level].size());
+    for (size_t i = 0; i < a.masks[level].size(); ++i) {
+      address[level][i] = static_cast<uint32_t>(word);
+      word += 1 + static_cast<uint64_t>(kByteBits[a.masks[level][i]]);
     }
+    if (word > 0xFFFFFFFFull) return ResourceLimit("decoded DAG exceeds 2^32 node words");
   }
   if (levels > 0) dag.level_offsets.push_back(static_cast<uint32_t>(word));
-  dag.nodes.reserve(word);
+  dag.nodes.resize(word);
+  uint32_t* node = dag.nodes.data();
   for (int level = 0; level < levels; ++level) {
-    size_t child = 0;
-    for (size_t i = 0; i < a.masks[level].size(); ++i) {
+    const std::vector<uint8_t>& masks = a.masks[level];
+    const uint32_t* child = a.children[level].data();
+    // The bricks' indices are stored as they are; other children as their records' addresses.
+    const uint32_t* child_address = level + 1 == levels ? nullptr : address[level + 1].data();
+    const bool upper = dag.IsUpperLevel(level);
+    for (size_t i = 0; i < masks.size(); ++i) {
       uint32_t field;
-      if (dag.IsUpperLevel(level)) {
+      if (upper) {
         if (count[level][i] > 0xFFFFFFFFull) return ResourceLimit("decoded DAG holds more than 2^32 voxels");
         field = static_cast<uint32_t>(dag.upper_counts.size());
         dag.upper_counts.push_back(static_cast<uint32_t>(count[level][i]));
       } else {
         field = static_cast<uint32_t>(count[level][i]);
       }
-      dag.nodes.push_back(uint32_t{a.masks[level][i]} << 24 | field);
-      for (int c = kByteBits[a.masks[level][i]]; c > 0; --c, ++child) {
-        const uint32_t k = a.children[level][child];
-        dag.nodes.push_back(level + 1 == levels ? k : address[level + 1][k]);
-      }
+      *node++ = uint32_t{masks[i]} << 24 | field;
+      for (int c = kByteBits[masks[i]]; c > 0; --c, ++child) *node++ = child_address ? child_address[*child] : *child;
     }
   }
   return dag;

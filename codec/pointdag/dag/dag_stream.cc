@@ -251,7 +251,8 @@ const char* GeometryCoderName(GeometryCoder coder) {
 }
 
 StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, int version) {
-  if (version < 1 || version > kPrefixRefsStreamVersion) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
+  if (version == kCompactSpatialVersion && (coder == GeometryCoder::kZstd || coder == GeometryCoder::kContext)) version = 5;
+  if (version < 1 || (version > kPrefixRefsStreamVersion && version != kCompactSpatialVersion)) return InvalidArgument("geometry stream version " + std::to_string(version) + " is unknown");
   if ((coder == GeometryCoder::kTable) != IsTableVersion(version)) {
     return InvalidArgument("geometry coder 3 is stream versions 6 and 7's, and they are coder 3's");
   }
@@ -269,6 +270,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
     for (uint64_t brick : arrays.leaves) {
       if (!seen.insert(brick).second) return InvalidArgument("geometry coder 2 needs each brick stored once: one repeats");
     }
+    if (version == kCompactSpatialVersion) return EncodeCompactSpatial(arrays, dag.depth, dag.mode);
     ASSIGN_OR_RETURN(const std::vector<uint8_t> payload, EncodeSpatial(arrays, dag.depth, version));
     out.insert(out.end(), payload.begin(), payload.end());
     return out;
@@ -289,6 +291,7 @@ StatusOr<std::vector<uint8_t>> EncodeDag(const Svdag& dag, GeometryCoder coder, 
 }
 
 StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
+  if (!bytes.empty() && bytes[0] == kCompactSpatialVersion) return DecodeCompactSpatial(bytes, max_nodes);
   if (bytes.size() < 4) return Truncated("geometry stream is shorter than its 4-byte header");
   if (bytes[0] < 1 || bytes[0] > kPrefixRefsStreamVersion) return Corrupt("geometry stream version " + std::to_string(bytes[0]) + " is unknown");
   if (bytes[1] > 3) return Corrupt("geometry stream names unknown coder " + std::to_string(bytes[1]));
@@ -338,7 +341,7 @@ StatusOr<Svdag> DecodeDag(std::span<const uint8_t> bytes, uint64_t max_nodes) {
       RETURN_IF_ERROR(source.Open(bytes.subspan(pos), depth, bytes[0] == kPrefixRefsStreamVersion));
       arrays = ReadSymbols(source, depth, counts);
     } else {
-      arrays = DecodeSpatial(bytes.subspan(pos), depth, counts, bytes[0]);
+      arrays = DecodeSpatial(bytes.subspan(pos), depth, &counts, max_nodes, bytes[0]);
     }
   }
   if (!arrays.ok()) return arrays.status();

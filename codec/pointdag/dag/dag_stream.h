@@ -35,11 +35,13 @@ namespace pointdag {
 enum class GeometryCoder : uint8_t { kZstd = 0, kContext = 1, kSpatial = 2, kTable = 3 };
 const char* GeometryCoderName(GeometryCoder coder);
 
-// The stream version writers write (PDAG_FORMAT §2.2); 1..4 stay readable and writable: they
-// differ only in coder 2, version 3's costing 1.6x the decode time of version 2's, version 4's 1.2x
-// version 3's, version 5's 1.2x version 4's.
-constexpr int kGeometryStreamVersion = 5;
-// Versions 6 and 7 are coder 3's, and coder 3 is theirs: readers read 1..7.
+// The stream version writers write (PDAG_FORMAT §2.2): 8, coder 2's alone (spatial_coder.h: its
+// own 2-byte header, no level table; coders 0 and 1 asked for it write version 5, as their streams
+// are the same in 1..5). 1..5 stay readable and writable: they differ only in coder 2, version 3's
+// costing 1.6x the decode time of version 2's, version 4's 1.2x version 3's, version 5's 1.2x
+// version 4's.
+constexpr int kGeometryStreamVersion = 8;
+// Versions 6 and 7 are coder 3's, and coder 3 is theirs: readers read 1..8.
 constexpr int kTableStreamVersion = 6;
 // Version 7 (the tiles'): coder 3 with its references in the prefix section (table_coder.h).
 constexpr int kPrefixRefsStreamVersion = 7;

@@ -45,8 +45,10 @@ class MaskMixer5 {
  public:
   static constexpr int kApmContexts = 8 * 8 * 8 * 4;
 
-  MaskMixer5() : pattern_(kPatternBase[3][0]), side_(8 * 2 * 128), apm_(size_t{kApmContexts} * 33) {
+  // `version`: the geometry stream's, 5 or 8 (8 starts the weights lower: below).
+  explicit MaskMixer5(int version) : pattern_(kPatternBase[3][0]), side_(8 * 2 * 128), apm_(size_t{kApmContexts} * 33) {
     for (size_t cx = 0; cx < kApmContexts; ++cx) std::copy(kApmStart.begin(), kApmStart.end(), apm_.begin() + cx * 33);
+    if (version >= 8) weights_.fill({19661, 13107, 13107, 13107, 13107, 0});
   }
 
   // Codes child c's bit. `context`: the version 2 model; `so_far`: the mask bits below c; `ones`: any of
@@ -116,7 +118,10 @@ class MaskMixer5 {
   std::vector<CompactYoungModel> pattern_;
   std::vector<YoungBitModel> side_;
   std::vector<uint16_t> apm_;
-  // The neighbour model starts trusted alone at 1, the others at 0.3 (the bias at 0).
+  // Version 5: the neighbour model starts trusted alone at 1, the others at 0.3 (the bias at 0).
+  // Version 8: at 0.3 and 0.2: young models' first estimates are confident (3/4 after one bit), and
+  // their sum at 2.2 overshot until the weights had learnt (tiny at 8 ft −31 bytes, −1.8 %; the
+  // six other cases of bench --versus −0.01..−0.27 %; docs/benchmarks.md "Small scans' geometry").
   std::array<std::array<int32_t, 6>, 16> weights_ = [] {
     std::array<std::array<int32_t, 6>, 16> t{};
     t.fill({65536, 19661, 19661, 19661, 19661, 0});

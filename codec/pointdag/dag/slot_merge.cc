@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <optional>
 #include <span>
 #include <utility>
 
@@ -24,10 +25,12 @@ uint64_t NodeKey(uint8_t mask, std::span<const uint32_t> kids) {
 }
 
 // Equal bricks become one: `ids` takes each slot's brick number.
-Status MergeBricks(const std::vector<uint64_t>& slots, uint64_t declared, std::vector<uint64_t>& leaves, std::vector<uint32_t>& ids) {
-  const size_t bits = TableBits(declared, slots.size());
+// `declared`: the level table's count (none in version 8).
+Status MergeBricks(const std::vector<uint64_t>& slots, std::optional<uint64_t> declared, std::vector<uint64_t>& leaves,
+                   std::vector<uint32_t>& ids) {
+  const size_t bits = TableBits(declared.value_or(slots.size()), slots.size());
   std::vector<uint32_t> table(size_t{1} << bits, UINT32_MAX);
-  leaves.reserve(declared);
+  leaves.reserve(std::min<uint64_t>(declared.value_or(slots.size()), slots.size()));
   ids.reserve(slots.size());
   for (uint64_t brick : slots) {
     size_t at = Slot(brick, bits);
@@ -39,21 +42,22 @@ Status MergeBricks(const std::vector<uint64_t>& slots, uint64_t declared, std::v
     }
     ids.push_back(table[at]);
   }
-  if (leaves.size() != declared) return Corrupt("geometry stream holds fewer bricks than its header declares");
+  if (declared && leaves.size() != *declared) return Corrupt("geometry stream holds fewer bricks than its header declares");
   return Status::Ok();
 }
 
 // Equal nodes of `level` (the same mask and children) become one; the level above then refers to
 // their numbers.
-Status MergeLevel(DagArrays& a, int level, uint64_t declared) {
+Status MergeLevel(DagArrays& a, int level, std::optional<uint64_t> declared) {
   const std::vector<uint8_t>& masks = a.masks[level];
   const std::vector<uint32_t>& kids = a.children[level];
-  const size_t bits = TableBits(declared, masks.size());
+  const uint64_t most = std::min<uint64_t>(declared.value_or(masks.size()), masks.size());
+  const size_t bits = TableBits(most, masks.size());
   std::vector<uint32_t> table(size_t{1} << bits, UINT32_MAX);
   std::vector<uint8_t> unique_masks;
   std::vector<uint32_t> unique_kids, starts;
-  unique_masks.reserve(declared);
-  starts.reserve(declared);
+  unique_masks.reserve(most);
+  starts.reserve(most);
   std::vector<uint32_t> ids(masks.size());
   size_t pos = 0;
   for (size_t j = 0; j < masks.size(); ++j) {
@@ -73,7 +77,7 @@ Status MergeLevel(DagArrays& a, int level, uint64_t declared) {
     }
     ids[j] = table[at];
   }
-  if (unique_masks.size() != declared) return Corrupt("geometry stream holds fewer nodes than its header declares");
+  if (declared && unique_masks.size() != *declared) return Corrupt("geometry stream holds fewer nodes than its header declares");
   a.masks[level] = std::move(unique_masks);
   a.children[level] = std::move(unique_kids);
   for (uint32_t& k : a.children[level - 1]) k = ids[k];
@@ -123,13 +127,14 @@ DagArrays ExpandSlots(const DagArrays& arrays, int slot_level) {
   return out;
 }
 
-Status MergeSlots(DagArrays& a, const std::vector<uint64_t>& slots, const std::vector<uint64_t>& counts, int slot_level) {
+Status MergeSlots(DagArrays& a, const std::vector<uint64_t>& slots, const std::vector<uint64_t>* counts, int slot_level) {
   const int levels = static_cast<int>(a.masks.size());
+  const auto declared = [&](int level) { return counts ? std::optional<uint64_t>((*counts)[level]) : std::nullopt; };
   std::vector<uint32_t> ids;
-  RETURN_IF_ERROR(MergeBricks(slots, counts[levels], a.leaves, ids));
+  RETURN_IF_ERROR(MergeBricks(slots, declared(levels), a.leaves, ids));
   if (levels == 0) return Status::Ok();
   a.children.back() = std::move(ids);
-  for (int level = levels - 1; level >= slot_level; --level) RETURN_IF_ERROR(MergeLevel(a, level, counts[level]));
+  for (int level = levels - 1; level >= slot_level; --level) RETURN_IF_ERROR(MergeLevel(a, level, declared(level)));
   return Status::Ok();
 }
 

@@ -30,7 +30,8 @@ DagArrays ExpandSlots(const DagArrays& arrays, int slot_level);
 
 // The decoder's merge: `slots` holds the 64-bit value of every brick slot in order, `a` the decoded
 // tree of the internal slot levels; equal bricks, then equal nodes of each internal slot level from
-// the bottom up, become one. Every level's distinct count must equal the header's `counts`.
-Status MergeSlots(DagArrays& a, const std::vector<uint64_t>& slots, const std::vector<uint64_t>& counts, int slot_level);
+// the bottom up, become one. Every level's distinct count must equal the header's `counts` (none
+// in version 8: as many as there are).
+Status MergeSlots(DagArrays& a, const std::vector<uint64_t>& slots, const std::vector<uint64_t>* counts, int slot_level);
 
 }  // namespace pointdag

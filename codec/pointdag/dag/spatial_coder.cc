@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <memory>
+#include <string>
 
 #include "pointdag/dag/mask_mixer.h"
 #include "pointdag/dag/mask_mixer5.h"
@@ -31,6 +32,7 @@ struct SpatialModels {
   // per tile, more than a tile's geometry decode touches.
   std::vector<std::array<YoungBitModel, kMaskContexts>> mask;
   std::array<BitModel, kClasses> flag;
+  std::array<YoungBitModel, kClasses> young_flag;  // version 8's flags
   std::array<GammaModel, kClasses> ref;
 };
 
@@ -47,7 +49,7 @@ class EncoderIo {
     return truth;
   }
   bool failed() const { return false; }
-  std::vector<uint8_t> Finish() { return rc_.Finish(); }
+  std::vector<uint8_t> Finish(bool compact) { return compact ? rc_.FinishCompact() : rc_.Finish(); }
 
  private:
   BinaryRangeEncoder rc_;
@@ -56,7 +58,7 @@ class EncoderIo {
 class DecoderIo {
  public:
   static constexpr bool kEncoding = false;
-  explicit DecoderIo(std::span<const uint8_t> payload) : rc_(payload) {}
+  DecoderIo(std::span<const uint8_t> payload, bool compact) : rc_(payload, compact) {}
   template <typename Model>
   int Bit(Model& m, int) { return rc_.Decode(m); }
   uint32_t Ref(GammaModel& m, uint32_t, uint32_t bound) { return DecodeGamma(rc_, m, std::bit_width(bound)) - 1; }
@@ -138,20 +140,25 @@ uint8_t CodeMask(Io& io, std::array<YoungBitModel, kMaskContexts>& models, const
 // One walk for both directions: the encoder's arrays are complete, the decoder's fill as it goes.
 // Slots carry no back-references: every child of a first cell on the level above the slot level
 // (slot_merge.h) is coded in full, the encoder walking arrays in which the slot levels are a tree,
-// and the decoder merges equal nodes; `slots` holds the bricks' values.
+// and the decoder merges equal nodes; `slots` holds the bricks' values. `counts`: the level table
+// the decoder checks (none in version 8, nor for the encoder), else `max_nodes` bounds the nodes
+// of the levels above the slots.
 template <typename Io, typename Arrays>
-Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& counts, std::vector<uint64_t>& slots, int version) {
+Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>* counts, uint64_t max_nodes, std::vector<uint64_t>& slots,
+                int version) {
   const int levels = depth - 2;
   const int slot_level = SlotLevel(levels, version);
   const bool edges = version >= 2;
   auto models = std::make_unique<SpatialModels>(depth);
   Mixers mix;
   if (version >= 5) {
-    mix.v5 = std::make_unique<MaskMixer5>();
+    mix.v5 = std::make_unique<MaskMixer5>(version);
   } else if (version >= 3) {
     mix.v3 = std::make_unique<MaskMixer>(version >= 4);
   }
   const bool planes = version >= 4;
+  const bool young_flags = version >= 8;
+  uint64_t nodes = 1;  // on the levels above the slots, the root included
   PlaneMemory memory;
   std::array<uint8_t, 8> states{};
   const auto known_mask = [&](int level, uint32_t id) -> uint8_t {
@@ -206,18 +213,20 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
       for (int c = n; c > 0; --c) {
         const uint32_t truth = Io::kEncoding ? a.children[level][child++] : 0;
         uint32_t k;
-        if (seen > 0 && io.Bit(models->flag[height], truth < seen ? 1 : 0)) {
+        const int back = truth < seen ? 1 : 0;
+        if (seen > 0 && (young_flags ? io.Bit(models->young_flag[height], back) : io.Bit(models->flag[height], back))) {
           k = io.Ref(models->ref[height], truth, seen);
           if (k >= seen) return Corrupt("geometry stream refers to a node not yet seen");
         } else {
           k = seen++;
-          if (seen > counts[level + 1]) return Corrupt("geometry stream holds more nodes than its header declares");
+          if (counts && seen > (*counts)[level + 1]) return Corrupt("geometry stream holds more nodes than its header declares");
+          if (++nodes > max_nodes) return Corrupt("geometry stream holds more nodes than its voxels allow");
         }
         if constexpr (!Io::kEncoding) a.children[level].push_back(k);
       }
     }
     if (io.failed()) return Truncated("geometry stream ends early");
-    if (level + 1 < slot_level && seen != counts[level + 1]) {
+    if (counts && level + 1 < slot_level && seen != (*counts)[level + 1]) {
       return Corrupt("geometry stream holds fewer nodes than its header declares");
     }
     if (level + 1 < depth) cur = Expand(cur, level, levels, a, planes);
@@ -229,9 +238,7 @@ Status Traverse(Io& io, Arrays& a, int depth, const std::vector<uint64_t>& count
 
 StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth, int version) {
   EncoderIo io;
-  std::vector<uint64_t> counts;
-  for (const auto& m : arrays.masks) counts.push_back(m.size());
-  counts.push_back(arrays.leaves.size());
+  constexpr uint64_t kUnbounded = UINT64_MAX;
   std::vector<uint64_t> slots;
   if (arrays.masks.empty()) {
     slots = arrays.leaves;
@@ -246,25 +253,49 @@ StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth,
     const DagArrays tree = ExpandSlots(arrays, slot_level);
     slots.clear();
     for (uint32_t k : tree.children.back()) slots.push_back(tree.leaves[k]);
-    RETURN_IF_ERROR(Traverse(io, tree, depth, counts, slots, version));
+    RETURN_IF_ERROR(Traverse(io, tree, depth, nullptr, kUnbounded, slots, version));
   } else {
-    RETURN_IF_ERROR(Traverse(io, arrays, depth, counts, slots, version));
+    RETURN_IF_ERROR(Traverse(io, arrays, depth, nullptr, kUnbounded, slots, version));
   }
-  return io.Finish();
+  return io.Finish(version >= kCompactSpatialVersion);
 }
 
-StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts,
-                                  int version) {
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>* counts,
+                                  uint64_t max_nodes, int version) {
   const int levels = depth - 2;
   DagArrays a;
   a.masks.resize(levels);
   a.children.resize(levels);
-  for (int level = 0; level < levels; ++level) a.masks[level].reserve(counts[level]);
+  if (counts) {
+    for (int level = 0; level < levels; ++level) a.masks[level].reserve((*counts)[level]);
+  }
   std::vector<uint64_t> slots(levels == 0 ? 1 : 0);
-  DecoderIo io(payload);
-  RETURN_IF_ERROR(Traverse(io, a, depth, counts, slots, version));
+  DecoderIo io(payload, version >= kCompactSpatialVersion);
+  RETURN_IF_ERROR(Traverse(io, a, depth, counts, max_nodes, slots, version));
   RETURN_IF_ERROR(MergeSlots(a, slots, counts, SlotLevel(levels, version)));
+  uint64_t total = a.leaves.size();
+  for (const auto& masks : a.masks) total += masks.size();
+  if (total > max_nodes) return Corrupt("geometry stream holds more nodes than its voxels allow");
   return a;
+}
+
+StatusOr<std::vector<uint8_t>> EncodeCompactSpatial(const DagArrays& arrays, int depth, CountMode mode) {
+  ASSIGN_OR_RETURN(std::vector<uint8_t> payload, EncodeSpatial(arrays, depth, kCompactSpatialVersion));
+  payload.insert(payload.begin(), {static_cast<uint8_t>(kCompactSpatialVersion),
+                                   static_cast<uint8_t>(depth | static_cast<int>(mode) << 5)});
+  return payload;
+}
+
+StatusOr<Svdag> DecodeCompactSpatial(std::span<const uint8_t> bytes, uint64_t max_nodes) {
+  if (bytes.size() < 2) return Truncated("geometry stream is shorter than its 2-byte header");
+  const int depth = bytes[1] & 31;
+  if (depth < 2 || depth > kMaxDepth) return Corrupt("geometry stream depth " + std::to_string(depth) + " is outside 2..21");
+  if (bytes[1] >> 6 != 0) return Corrupt("geometry stream sets reserved header bits");
+  const auto mode = static_cast<CountMode>(bytes[1] >> 5);
+  ASSIGN_OR_RETURN(const DagArrays arrays, DecodeSpatial(bytes.subspan(2), depth, nullptr, max_nodes, kCompactSpatialVersion));
+  ASSIGN_OR_RETURN(Svdag dag, FromArrays(arrays, depth, mode));
+  RETURN_IF_ERROR(dag.Validate());
+  return dag;
 }
 
 }  // namespace pointdag

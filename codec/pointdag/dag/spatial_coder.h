@@ -25,11 +25,21 @@ constexpr uint64_t kMaxSpatialNodesPerByte = 820;
 
 // `version`: the geometry stream's (PDAG_FORMAT §2.2): 2 adds edge and corner neighbours to the
 // mask contexts, 1 does without, 3 mixes version 2's model with two more (mask_mixer.h), 4 with
-// three more.
+// three more, 5 with five others (mask_mixer5.h), 8 is 5 with young flags, lower starting weights
+// and the range coder's compact ends. Returns the payload after the stream's header.
 StatusOr<std::vector<uint8_t>> EncodeSpatial(const DagArrays& arrays, int depth, int version);
 
-// `counts`: nodes per internal level, then bricks (the stream's level table, already checked).
-StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>& counts,
-                                  int version);
+// `counts`: nodes per internal level, then bricks (the stream's level table, already checked); none
+// in version 8, whose decoder bounds the nodes it keeps by `max_nodes` instead.
+StatusOr<DagArrays> DecodeSpatial(std::span<const uint8_t> payload, int depth, const std::vector<uint64_t>* counts,
+                                  uint64_t max_nodes, int version);
+
+// Geometry stream version 8 (files' default), coder 2's alone: a 2-byte header (the version, then
+// the depth in bits 0..4 and the count mode in bit 5) and the payload, without the coder byte and
+// the level table of versions 1..6: on small scans those and the range coder's fixed bytes were
+// 1 % of the stream. The whole stream, header included.
+constexpr int kCompactSpatialVersion = 8;
+StatusOr<std::vector<uint8_t>> EncodeCompactSpatial(const DagArrays& arrays, int depth, CountMode mode);
+StatusOr<Svdag> DecodeCompactSpatial(std::span<const uint8_t> bytes, uint64_t max_nodes);
 
 }  // namespace pointdag

@@ -121,6 +121,24 @@ class BinaryRangeEncoder {
     for (int i = 0; i < 5; ++i) ShiftLow();
     return std::move(out_);
   }
+  // Finish() less what a decoder reading zeros past the end infers (geometry stream version 8): the
+  // first byte (always 0: low starts below 2^32 and nothing carries into it) and the zero bytes
+  // at the end, at most 4, after flushing the value in [low, low + range) with the most trailing
+  // zero bits (range >= 2^24 here: its low 3 bytes at least are zero). Read it with `compact`.
+  std::vector<uint8_t> FinishCompact() {
+    for (int zeros = 32; zeros > 0; --zeros) {
+      const uint64_t mask = (uint64_t{1} << zeros) - 1;
+      const uint64_t rounded = (low_ + mask) & ~mask;
+      if (rounded - low_ < range_) {
+        low_ = rounded;
+        break;
+      }
+    }
+    for (int i = 0; i < 5; ++i) ShiftLow();
+    for (int i = 0; i < 4 && out_.size() > 1 && out_.back() == 0; ++i) out_.pop_back();
+    out_.erase(out_.begin());
+    return std::move(out_);
+  }
 
  private:
   // Most bits leave the range above 2^24: the test inline, the byte output out of line.
@@ -156,8 +174,9 @@ class BinaryRangeEncoder {
 
 class BinaryRangeDecoder {
  public:
-  explicit BinaryRangeDecoder(std::span<const uint8_t> in) : in_(in) {
-    for (int i = 0; i < 5; ++i) code_ = code_ << 8 | Next();
+  // `compact`: the input was written by FinishCompact (its implied first byte is not read).
+  explicit BinaryRangeDecoder(std::span<const uint8_t> in, bool compact = false) : in_(in) {
+    for (int i = compact ? 1 : 0; i < 5; ++i) code_ = code_ << 8 | Next();
   }
   // Branch-free: the bit is a coin toss to the branch predictor, selects are not.
   template <typename Model>
@@ -182,7 +201,8 @@ class BinaryRangeDecoder {
     }
     return value;
   }
-  // True once the decoder has wanted more bytes than the input had: the stream was truncated.
+  // True once the decoder has wanted more bytes than the input had: the stream was truncated (a
+  // compact one reads at most its 4 dropped zero bytes past its end).
   bool overrun() const { return read_ > in_.size() + 4; }
   // True when the decoder has read exactly its input, as it does on what Finish() wrote: a stream
   // that must fill its bytes can then refuse both truncation and trailing bytes.

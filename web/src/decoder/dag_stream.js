@@ -10,14 +10,15 @@ import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
 import { GrowableU32 } from './growable_u32.js';
 import { GAMMA_MODELS, RangeDecoder, bitTreeModels, bitWidth, newModels } from './range_coder.js';
 import { PREFIX_CODE_BITS, PrefixDecoder, buildPrefixTable } from './prefix_code.js';
-import { decodeSpatial } from './spatial_coder.js';
+import { COMPACT_SPATIAL_VERSION, decodeCompactSpatial, decodeSpatial } from './spatial_coder.js';
 import { readVarint } from './varint.js';
 
 export const MAX_DEPTH = 21;
 export const COUNT_LEAVES = 0;
 export const COUNT_MIPMAP = 1;
 
-// Versions 2..5 change coder 2 only; versions 1..4 still decode; versions 6 and 7 are coder 3's.
+// Versions 2..5 and 8 change coder 2 only; versions 1..5 still decode; versions 6 and 7 are coder
+// 3's, 8 coder 2's alone (its own header: spatial_coder.js).
 const STREAM_VERSION = 5;
 const TABLE_STREAM_VERSION = 6;
 const PREFIX_REFS_STREAM_VERSION = 7;  // coder 3, references in the prefix section
@@ -225,6 +226,11 @@ function addCounts(dag) {
 
 // `maxNodes` bounds what a lying level table may make the decoder allocate (nodes + bricks).
 export function decodeDag(bytes, maxNodes) {
+  if (bytes.length > 0 && bytes[0] === COMPACT_SPATIAL_VERSION) {
+    const dag = decodeCompactSpatial(bytes, maxNodes);
+    addCounts(dag);
+    return dag;
+  }
   if (bytes.length < 4) throw corrupt('geometry stream is shorter than its 4-byte header');
   if (!(bytes[0] >= 1 && bytes[0] <= PREFIX_REFS_STREAM_VERSION)) throw corrupt(`geometry stream version ${bytes[0]} is unknown`);
   if (bytes[1] > CODER_TABLE) throw corrupt(`geometry stream names unknown coder ${bytes[1]}`);
@@ -271,7 +277,7 @@ export function decodeDag(bytes, maxNodes) {
       const p = newModels(MODEL_COUNT);
       dag = readSymbols(rc, p, new ContextMasks(rc, p), depth, mode, counts);
     } else {
-      dag = { ...decodeSpatial(rc, depth, counts, bytes[0]), mode };
+      dag = { ...decodeSpatial(rc, depth, counts, bytes[0], maxNodes), mode };
     }
   }
   addCounts(dag);

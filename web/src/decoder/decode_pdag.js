@@ -10,6 +10,7 @@
 import { decodeColors, unsupportedColorCodec } from './color_section.js';
 import { COUNT_LEAVES, MAX_DEPTH, decodeDag } from './dag_stream.js';
 import { enumerateVoxels } from './dag_voxels.js';
+import { COMPACT_SPATIAL_VERSION } from './spatial_coder.js';
 import { JsonFields } from './json_fields.js';
 import { parsePdagContainer } from './pdag_container.js';
 import { corrupt, resourceLimit, unsupported } from './pdag_error.js';
@@ -22,7 +23,8 @@ export const DEFAULT_LIMITS = Object.freeze({ maxVoxels: 2 ** 27, maxNodes: 2 **
 // Parts of the format that neither this decoder nor the WebAssembly build (web/wasm) reads, refused
 // before anything else is decoded, at the same point in both, so that both fail alike.
 export function refuseUnsupported(geometry, colors) {
-  if (geometry.length >= 2 && geometry[1] === 0) {
+  // (Version 8's second byte is its depth and mode, not a coder.)
+  if (geometry.length >= 2 && geometry[0] !== COMPACT_SPATIAL_VERSION && geometry[1] === 0) {
     throw unsupported('the geometry stream is zstd-coded; this decoder reads the range coders only');
   }
   const why = colors ? unsupportedColorCodec(colors[0]) : null;

@@ -25,7 +25,8 @@ const APM_START = Uint16Array.from({ length: 33 }, (_, j) => {
 });
 
 export class MaskMixer5 {
-  constructor() {
+  // `version`: the geometry stream's, 5 or 8 (8 starts the weights at 0.3 and 0.2, not 1 and 0.3).
+  constructor(version) {
     this.sides = newModels(256 * 64);
     this.sidesAge = new Uint8Array(256 * 64);
     this.planes = newModels(256 * 27);
@@ -37,7 +38,8 @@ export class MaskMixer5 {
     this.apm = new Uint16Array(APM_CONTEXTS * 33);
     for (let k = 0; k < APM_CONTEXTS; ++k) this.apm.set(APM_START, 33 * k);
     this.w = new Int32Array(16 * 6);
-    for (let k = 0; k < this.w.length; k += 6) this.w.set([65536, 19661, 19661, 19661, 19661, 0], k);
+    const start = version >= 8 ? [19661, 13107, 13107, 13107, 13107, 0] : [65536, 19661, 19661, 19661, 19661, 0];
+    for (let k = 0; k < this.w.length; k += 6) this.w.set(start, k);
   }
   // Decodes child c's bit; `young`/`age`/`m`: the version 2 model; `faces`: bits 0..2 the node's
   // lower x, y, z face neighbours exist, 3..5 the upper; `plane`: the plane memory's state (0..26);

@@ -48,8 +48,9 @@ const GAMMA_MODELLED_BITS = 3;
 export const GAMMA_MODELS = 33 + 33 * 8;
 
 export class RangeDecoder {
-  // Decodes bytes[start, end); past the end it reads zeros and counts them (overrun()).
-  constructor(bytes, start = 0, end = bytes.length) {
+  // Decodes bytes[start, end); past the end it reads zeros and counts them (overrun()). `compact`:
+  // written by FinishCompact (geometry stream version 8), without the leading zero byte.
+  constructor(bytes, start = 0, end = bytes.length, compact = false) {
     this.bytes = bytes;
     this.end = end;
     this.missing = 0;
@@ -57,7 +58,7 @@ export class RangeDecoder {
     this.s[0] = -1;  // 0xffffffff
     this.s[2] = start;
     let code = 0;
-    for (let i = 0; i < 5; ++i) code = (code << 8) | this.next();
+    for (let i = compact ? 1 : 0; i < 5; ++i) code = (code << 8) | this.next();
     this.s[1] = code;
   }
   next() {

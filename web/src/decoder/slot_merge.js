@@ -9,8 +9,10 @@ import { POP } from './spatial_context.js';
 export const slotLevel = (levels, version) => (version >= 5 && levels >= 2 ? Math.max(levels - 2, 1) : levels);
 
 // Equal bricks become one, numbered in the order first seen (open addressing on the 64 bits).
-export function mergeBricks(slotLo, slotHi, bricks) {
+// `declared`: the level table's count (null in version 8: as many as there are).
+export function mergeBricks(slotLo, slotHi, declared) {
   const n = slotLo.length;
+  const bricks = declared ?? n;
   let cap = 16;
   while (cap < 2 * n) cap *= 2;
   const table = new Int32Array(cap).fill(-1);
@@ -25,7 +27,7 @@ export function mergeBricks(slotLo, slotHi, bricks) {
     for (;;) {
       const k = table[h];
       if (k < 0) {
-        if (count === bricks) throw corrupt('geometry stream holds more bricks than its header declares');
+        if (count === declared) throw corrupt('geometry stream holds more bricks than its header declares');
         brickLo[count] = lo;
         brickHi[count] = hi;
         table[h] = count;
@@ -39,18 +41,20 @@ export function mergeBricks(slotLo, slotHi, bricks) {
       h = (h + 1) & (cap - 1);
     }
   }
-  if (count !== bricks) throw corrupt('geometry stream holds fewer bricks than its header declares');
-  return { ids, brickLo, brickHi };
+  if (declared !== null && count !== declared) throw corrupt('geometry stream holds fewer bricks than its header declares');
+  return { ids, brickLo: brickLo.subarray(0, count), brickHi: brickHi.subarray(0, count) };
 }
 
 // Equal nodes of one slot level (the same mask and children) become one: returns the level's
 // distinct masks, where their children start and the children, and each slot's number.
+// `declared`: as mergeBricks'.
 export function mergeLevel(masks, kids, declared) {
   const n = masks.length;
-  const cap = 2 ** (bitWidth(Math.min(declared, n)) + 1);
+  const most = declared === null ? n : Math.min(declared, n);
+  const cap = 2 ** (bitWidth(most) + 1);
   const table = new Int32Array(cap).fill(-1);
-  const uniqueMasks = new Uint8Array(declared);
-  const starts = new Uint32Array(declared + 1);
+  const uniqueMasks = new Uint8Array(declared ?? n);
+  const starts = new Uint32Array((declared ?? n) + 1);
   const uniqueKids = new Uint32Array(kids.length);
   const ids = new Uint32Array(n);
   let count = 0;
@@ -81,9 +85,9 @@ export function mergeLevel(masks, kids, declared) {
     }
     pos = end;
   }
-  if (count !== declared) throw corrupt('geometry stream holds fewer nodes than its header declares');
+  if (declared !== null && count !== declared) throw corrupt('geometry stream holds fewer nodes than its header declares');
   starts[count] = used;
-  return { masks: uniqueMasks, first: starts, kids: uniqueKids.slice(0, used), ids };
+  return { masks: uniqueMasks.subarray(0, count), first: starts.subarray(0, count + 1), kids: uniqueKids.slice(0, used), ids };
 }
 
 function sameKids(a, at, b, from, end) {

@@ -7,7 +7,7 @@ import { corrupt } from './pdag_error.js';
 import { GrowableU32 } from './growable_u32.js';
 import { MaskMixer } from './mask_mixer.js';
 import { MaskMixer5, PATTERN_BASE } from './mask_mixer5.js';
-import { GAMMA_MODELS, bitWidth, newModels } from './range_coder.js';
+import { GAMMA_MODELS, RangeDecoder, bitWidth, newModels } from './range_coder.js';
 import { mergeBricks, mergeLevel, slotLevel } from './slot_merge.js';
 import {
   DIAGONAL_SELF, FACING, PATTERN_COUNT, PATTERN_SELF, POP, SIBLINGS, SIDES, expand, newLevel, planeRecord, planeStates,
@@ -15,6 +15,9 @@ import {
 } from './spatial_context.js';
 
 const CLASSES = 22;  // heights 0..21
+// Geometry stream version 8 (files' default): version 5 with young flags, lower starting weights, a
+// 2-byte header (version; depth in bits 0..4, count mode in bit 5) and no level table.
+export const COMPACT_SPATIAL_VERSION = 8;
 const MASK_CONTEXTS = 4 * 8 * 27 * 4;
 const FLAG_BASE = 0;
 const REF_BASE = CLASSES;
@@ -65,11 +68,22 @@ function decodeMask(rc, young, age, base, lv, i, v2, edges, mix, planes, mix5, s
   return m;
 }
 
-export function decodeSpatial(rc, depth, counts, version) {
+// Version 8's whole stream: returns decodeSpatial's shape with the count mode.
+export function decodeCompactSpatial(bytes, maxNodes) {
+  if (bytes.length < 2) throw corrupt('geometry stream is shorter than its 2-byte header');
+  const depth = bytes[1] & 31;
+  if (depth < 2 || depth > CLASSES - 1) throw corrupt(`geometry stream depth ${depth} is outside 2..21`);
+  if (bytes[1] >> 6 !== 0) throw corrupt('geometry stream sets reserved header bits');
+  const rc = new RangeDecoder(bytes, 2, bytes.length, true);
+  return { ...decodeSpatial(rc, depth, null, COMPACT_SPATIAL_VERSION, maxNodes), mode: bytes[1] >> 5 };
+}
+
+// `counts`: the level table (null in version 8, whose nodes `maxNodes` bounds as they are decoded).
+export function decodeSpatial(rc, depth, counts, version, maxNodes) {
   const levels = depth - 2;
   const v2 = version >= 2;
   const edges = new Int32Array(12);
-  const mix5 = version >= 5 ? new MaskMixer5() : null;
+  const mix5 = version >= 5 ? new MaskMixer5(version) : null;
   const mix = version >= 3 && !mix5 ? new MaskMixer(version >= 4) : null;
   const side = mix5 ? new Uint8Array(8) : null;
   const pattern = mix5 ? new Uint16Array(8) : null;
@@ -80,6 +94,10 @@ export function decodeSpatial(rc, depth, counts, version) {
   const young = newModels(CLASSES * MASK_CONTEXTS);
   const age = new Uint8Array(CLASSES * MASK_CONTEXTS);
   const p = newModels(REF_BASE + CLASSES * GAMMA_MODELS);
+  const youngFlags = version >= 8;
+  const flagAge = youngFlags ? new Uint8Array(CLASSES) : null;  // young flags: models FLAG_BASE + height of p
+  let nodes = 1;  // on the levels above the slots, the root included
+  let nodesHere = 1;  // first cells of this level: the new nodes the level above referenced
   const masks = [];
   const firstChild = [];
   const children = [];
@@ -95,11 +113,11 @@ export function decodeSpatial(rc, depth, counts, version) {
     const refBase = REF_BASE + height * GAMMA_MODELS;
     const internal = level < levels;
     // On a slot level every cell is first: as many nodes as cells, merged after the walk.
-    const n = !internal ? 0 : level >= slotsFrom ? cur.n : counts[level];
+    const n = !internal ? 0 : level >= slotsFrom ? cur.n : nodesHere;
     const group = 8 * (height <= 1 ? 0 : height === 2 ? 1 : 2);
     const levelMasks = new Uint8Array(n);
     const first = new Uint32Array(n + 1);
-    const kids = new GrowableU32(internal && level + 1 < levels ? Math.min(8 * n, 2 * counts[level + 1]) : 0);
+    const kids = new GrowableU32(internal && level + 1 < levels ? Math.min(8 * n, 2 * (counts ? counts[level + 1] : n)) : 0);
     if (planes) for (let axis = 0; axis < 3; ++axis) last[axis] = new Uint8Array(2 << level);
     let coded = 0;
     let seen = 0;
@@ -137,18 +155,20 @@ export function decodeSpatial(rc, depth, counts, version) {
       }
       for (let c = count; c > 0; --c) {
         let k;
-        if (seen > 0 && rc.bit(p, flagModel)) {
+        if (seen > 0 && (youngFlags ? rc.youngBit(p, flagAge, flagModel) : rc.bit(p, flagModel))) {
           k = rc.gamma(p, refBase, bitWidth(seen)) - 1;
           if (k >= seen) throw corrupt('geometry stream refers to a node not yet seen');
         } else {
           k = seen++;
-          if (seen > counts[level + 1]) throw corrupt('geometry stream holds more nodes than its header declares');
+          if (counts && seen > counts[level + 1]) throw corrupt('geometry stream holds more nodes than its header declares');
+          if (++nodes > maxNodes) throw corrupt('geometry stream holds more nodes than its voxels allow');
         }
         kids.push(k);
       }
     }
     if (rc.overrun()) throw corrupt('geometry stream ends early');
-    if (level + 1 < slotsFrom && seen !== counts[level + 1]) throw corrupt('geometry stream holds fewer nodes than its header declares');
+    if (counts && level + 1 < slotsFrom && seen !== counts[level + 1]) throw corrupt('geometry stream holds fewer nodes than its header declares');
+    nodesHere = seen;
     if (internal) {
       first[n] = level + 1 === levels ? slots : kids.n;
       masks.push(levelMasks);
@@ -161,16 +181,19 @@ export function decodeSpatial(rc, depth, counts, version) {
     }
     if (level + 1 < depth) cur = expand(cur, level, levels, kids.a, planes);
   }
-  const merged = mergeBricks(slotLo, slotHi, counts[levels]);
+  const merged = mergeBricks(slotLo, slotHi, counts ? counts[levels] : null);
   if (levels > 0) children[levels - 1] = merged.ids;
   for (let level = levels - 1; level >= slotsFrom; --level) {
-    const unique = mergeLevel(masks[level], children[level], counts[level]);
+    const unique = mergeLevel(masks[level], children[level], counts ? counts[level] : null);
     masks[level] = unique.masks;
     firstChild[level] = unique.first;
     children[level] = unique.kids;
     const above = children[level - 1];
     for (let k = 0; k < above.length; ++k) above[k] = unique.ids[above[k]];
   }
+  let total = merged.brickLo.length;
+  for (const m of masks) total += m.length;
+  if (total > maxNodes) throw corrupt('geometry stream holds more nodes than its voxels allow');
   return { depth, levels, masks, firstChild, children, brickLo: merged.brickLo, brickHi: merged.brickHi };
 }
 
