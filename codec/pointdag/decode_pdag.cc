@@ -39,7 +39,7 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limit
     return ResourceLimit(".pdag geometry holds " + std::to_string(root_count) + " nodes, more than the " +
                          std::to_string(limits.max_voxels) + " this decoder allows");
   }
-  out.grid.morton = out.dag.MortonCodes(voxels);  // voxels <= root_count, checked above
+  out.grid.morton = out.dag.MortonCodes();
   if (out.grid.morton.size() != voxels) return Corrupt(".pdag metadata voxel count disagrees with its geometry");
   if (!file.colors.empty()) {
     if (out.dag.mode == CountMode::kMipmap) {

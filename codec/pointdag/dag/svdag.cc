@@ -120,10 +120,9 @@ void Svdag::ForEachVoxel(const std::function<void(uint64_t)>& visit) const {
   VisitVoxels(*this, 0, 0, 0, visit);
 }
 
-std::vector<uint64_t> Svdag::MortonCodes(size_t expected) const {
+std::vector<uint64_t> Svdag::MortonCodes() const {
   std::vector<uint64_t> codes;
   if (leaves.empty()) return codes;
-  codes.reserve(expected);
   auto push = [&](uint64_t code) { codes.push_back(code); };
   VisitVoxels(*this, 0, 0, 0, push);
   return codes;

@@ -66,8 +66,7 @@ struct Svdag {
 
   // Visits every voxel in Morton order with its Morton code; the i-th call is color index i in leaf mode.
   void ForEachVoxel(const std::function<void(uint64_t morton)>& visit) const;
-  // `expected`: a capacity to reserve (the voxel count where the caller has checked it).
-  std::vector<uint64_t> MortonCodes(size_t expected = 0) const;
+  std::vector<uint64_t> MortonCodes() const;
 
   friend bool operator==(const Svdag&, const Svdag&) = default;
 
