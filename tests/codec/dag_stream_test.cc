@@ -16,6 +16,12 @@ namespace {
 
 using testing::SurfaceVoxels;
 
+// A stream of fuzz/seeds/dag_stream (empty when missing: the tests then fail on it).
+std::vector<uint8_t> ReadSeed(const std::string& name) {
+  std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
 Svdag Build(int depth, size_t voxels, uint32_t seed, CountMode mode = CountMode::kLeaves) {
   DagBuildOptions options;
   options.mode = mode;
@@ -137,13 +143,9 @@ TEST(DagStream, SurvivesTruncationAndBitFlips) {
 // flags, weights and compact framing) still decode: the fuzz seeds of tiny at 40 ft in all six
 // versions hold one DAG, versions 3 to 5 re-encode byte for byte, and writers write version 8.
 TEST(DagStream, SpatialVersions1To5StillDecode) {
-  const auto read = [](const std::string& name) {
-    std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
-    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
-  };
   for (const std::string mode : {"leaves", "mipmap"}) {
-    std::vector<std::vector<uint8_t>> streams = {read(mode + "_spatial.bin")};
-    for (int version : {2, 3, 4, 5, 8}) streams.push_back(read(mode + "_spatial_v" + std::to_string(version) + ".bin"));
+    std::vector<std::vector<uint8_t>> streams = {ReadSeed(mode + "_spatial.bin")};
+    for (int version : {2, 3, 4, 5, 8}) streams.push_back(ReadSeed(mode + "_spatial_v" + std::to_string(version) + ".bin"));
     const Svdag dag = DecodeDag(streams[0]).value();
     for (size_t i = 0; i < streams.size(); ++i) {
       const int version = i < 5 ? static_cast<int>(i) + 1 : 8;
@@ -161,41 +163,25 @@ TEST(DagStream, SpatialVersions1To5StillDecode) {
   }
 }
 
-// Coder 3 (stream version 6, the tiles'): the seeds of tiny at 40 ft re-encoded with it hold the
-// same DAG and are what the writer writes; random surfaces of every depth round-trip; version 6 and
-// coder 3 come only together; every cut or flip ends in a typed status or a valid DAG.
-TEST(DagStream, TableCoderRoundTrips) {
-  const auto read = [](const std::string& name) {
-    std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
-    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
-  };
-  for (const std::string mode : {"leaves", "mipmap"}) {
-    const Svdag dag = DecodeDag(read(mode + "_spatial_v5.bin")).value();
-    const std::vector<uint8_t> table = read(mode + "_table.bin");
-    ASSERT_EQ(table.at(0), kTableStreamVersion);
-    ASSERT_EQ(table.at(1), 3);
-    EXPECT_EQ(DecodeDag(table).value(), dag);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value(), table);
-  }
+// Random surfaces of depths 2..10 in both count modes, written by coder 3 in `version`, decode to
+// themselves.
+void ExpectTableCoderRoundTripsAtEveryDepth(int version, size_t voxels, uint32_t seed_offset) {
   for (int depth : {2, 3, 5, 8, 10}) {
     for (CountMode mode : {CountMode::kLeaves, CountMode::kMipmap}) {
-      const Svdag dag = Build(depth, 3000, static_cast<uint32_t>(depth), mode);
-      const auto bytes = EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value();
+      const Svdag dag = Build(depth, voxels, static_cast<uint32_t>(depth) + seed_offset, mode);
+      const auto bytes = EncodeDag(dag, GeometryCoder::kTable, version).value();
       EXPECT_EQ(DecodeDag(bytes).value(), dag) << "depth " << depth;
     }
   }
-  const Svdag dag = Build(6, 2000, 4);
-  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable).status().code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, kTableStreamVersion).status().code(), StatusCode::kInvalidArgument);
-  const auto good = EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value();
-  auto mismatched = good;
-  mismatched[0] = 5;
-  EXPECT_EQ(DecodeDag(mismatched).status().code(), StatusCode::kCorrupt);
+}
+
+// Every cut of `good` fails (the masks end the stream: no flush bytes to spare), and every one-bit
+// flip ends in a typed status or a valid DAG.
+void ExpectCutsFailAndFlipsStayValid(const std::vector<uint8_t>& good, uint32_t seed) {
   for (size_t length = 0; length < good.size(); ++length) {
-    const auto cut = DecodeDag(std::span(good).first(length));
-    EXPECT_FALSE(cut.ok()) << "cut at " << length;  // the masks end the stream: no flush bytes to spare
+    EXPECT_FALSE(DecodeDag(std::span(good).first(length)).ok()) << "cut at " << length;
   }
-  std::mt19937 rng(6);
+  std::mt19937 rng(seed);
   for (int trial = 0; trial < 2000; ++trial) {
     auto flipped = good;
     flipped[rng() % flipped.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
@@ -206,45 +192,47 @@ TEST(DagStream, TableCoderRoundTrips) {
   }
 }
 
+// Coder 3 (stream version 6, the tiles'): the seeds of tiny at 40 ft re-encoded with it hold the
+// same DAG and are what the writer writes; random surfaces of every depth round-trip; version 6 and
+// coder 3 come only together; every cut or flip ends in a typed status or a valid DAG.
+TEST(DagStream, TableCoderRoundTrips) {
+  for (const std::string mode : {"leaves", "mipmap"}) {
+    const Svdag dag = DecodeDag(ReadSeed(mode + "_spatial_v5.bin")).value();
+    const std::vector<uint8_t> table = ReadSeed(mode + "_table.bin");
+    ASSERT_EQ(table.at(0), kTableStreamVersion);
+    ASSERT_EQ(table.at(1), 3);
+    EXPECT_EQ(DecodeDag(table).value(), dag);
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value(), table);
+  }
+  ExpectTableCoderRoundTripsAtEveryDepth(kTableStreamVersion, 3000, 0);
+  const Svdag dag = Build(6, 2000, 4);
+  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeDag(dag, GeometryCoder::kSpatial, kTableStreamVersion).status().code(), StatusCode::kInvalidArgument);
+  const auto good = EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value();
+  auto mismatched = good;
+  mismatched[0] = 5;
+  EXPECT_EQ(DecodeDag(mismatched).status().code(), StatusCode::kCorrupt);
+  ExpectCutsFailAndFlipsStayValid(good, 6);
+}
+
 // Version 7 (coder 3, references in the prefix section; the tiles'): the seeds hold version 5's DAG
 // and are what the writer writes; DAGs with many repeats (references of every length class) round-trip
 // at every depth; the masks cost what version 6's cost; every cut or flip ends in a typed status or a
 // valid DAG.
 TEST(DagStream, PrefixCodedReferencesRoundTrip) {
-  const auto read = [](const std::string& name) {
-    std::ifstream in(std::string(POINTDAG_SOURCE_DIR) + "/fuzz/seeds/dag_stream/" + name, std::ios::binary);
-    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
-  };
   for (const std::string mode : {"leaves", "mipmap"}) {
-    const Svdag dag = DecodeDag(read(mode + "_spatial_v5.bin")).value();
-    const std::vector<uint8_t> v7 = read(mode + "_table_v7.bin");
+    const Svdag dag = DecodeDag(ReadSeed(mode + "_spatial_v5.bin")).value();
+    const std::vector<uint8_t> v7 = ReadSeed(mode + "_table_v7.bin");
     ASSERT_EQ(v7.at(0), kPrefixRefsStreamVersion);
     ASSERT_EQ(v7.at(1), 3);
     EXPECT_EQ(DecodeDag(v7).value(), dag);
     EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, kPrefixRefsStreamVersion).value(), v7);
-    EXPECT_EQ(read(mode + "_table.bin"), EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value()) << "version 6 unchanged";
+    EXPECT_EQ(ReadSeed(mode + "_table.bin"), EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value()) << "version 6 unchanged";
   }
-  for (int depth : {2, 3, 5, 8, 10}) {
-    for (CountMode mode : {CountMode::kLeaves, CountMode::kMipmap}) {
-      const Svdag dag = Build(depth, 6000, static_cast<uint32_t>(depth) + 40, mode);
-      const auto bytes = EncodeDag(dag, GeometryCoder::kTable, kPrefixRefsStreamVersion).value();
-      EXPECT_EQ(DecodeDag(bytes).value(), dag) << "depth " << depth;
-    }
-  }
+  ExpectTableCoderRoundTripsAtEveryDepth(kPrefixRefsStreamVersion, 6000, 40);
   EXPECT_EQ(EncodeDag(Build(6, 2000, 4), GeometryCoder::kSpatial, kPrefixRefsStreamVersion).status().code(), StatusCode::kInvalidArgument);
   const auto good = EncodeDag(Build(8, 4000, 9), GeometryCoder::kTable, kPrefixRefsStreamVersion).value();
-  for (size_t length = 0; length < good.size(); ++length) {
-    EXPECT_FALSE(DecodeDag(std::span(good).first(length)).ok()) << "cut at " << length;
-  }
-  std::mt19937 rng(7);
-  for (int trial = 0; trial < 2000; ++trial) {
-    auto flipped = good;
-    flipped[rng() % flipped.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
-    const auto decoded = DecodeDag(flipped);
-    if (decoded.ok()) {
-      EXPECT_TRUE(decoded->Validate().ok());
-    }
-  }
+  ExpectCutsFailAndFlipsStayValid(good, 7);
 }
 
 // Version 5 codes the nodes of height 3 at every occurrence and merges them back: a DAG in which
