@@ -205,7 +205,9 @@ TEST(ShadowDag, FreeSpaceAnswersTheAirToo) {
     EXPECT_LT(surface->stats().shadow_dag_bytes, shadow->stats().shadow_dag_bytes);
     EXPECT_TRUE(ShadowDag::Deserialize(shadow->Serialize()).ok());
   }
-  EXPECT_GT(shadowed_air, 300);  // the air behind the box and the scan, not only lit air
+  // The air behind the box (163 cells of the three box cases) and the scan, not only lit air; without
+  // the shared scans only the box cases run.
+  EXPECT_GT(shadowed_air, cases.size() > 3 ? 300 : 120);
 }
 
 // Every surface voxel of real scans at low resolution, several directions, each relaxation step
