@@ -163,6 +163,19 @@ TEST(DagStream, SpatialVersions1To5StillDecode) {
   }
 }
 
+// The seeds `<mode><suffix>` (coder 3 in `version`) hold the DAG of version 5's seeds and are what the
+// writer writes from it.
+void ExpectSeedsHoldVersion5sDag(const std::string& suffix, int version) {
+  for (const std::string mode : {"leaves", "mipmap"}) {
+    const Svdag dag = DecodeDag(ReadSeed(mode + "_spatial_v5.bin")).value();
+    const std::vector<uint8_t> stream = ReadSeed(mode + suffix);
+    ASSERT_EQ(stream.at(0), version);
+    ASSERT_EQ(stream.at(1), 3);
+    EXPECT_EQ(DecodeDag(stream).value(), dag) << mode;
+    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, version).value(), stream) << mode;
+  }
+}
+
 // Random surfaces of depths 2..10 in both count modes, written by coder 3 in `version`, decode to
 // themselves.
 void ExpectTableCoderRoundTripsAtEveryDepth(int version, size_t voxels, uint32_t seed_offset) {
@@ -196,14 +209,7 @@ void ExpectCutsFailAndFlipsStayValid(const std::vector<uint8_t>& good, uint32_t 
 // same DAG and are what the writer writes; random surfaces of every depth round-trip; version 6 and
 // coder 3 come only together; every cut or flip ends in a typed status or a valid DAG.
 TEST(DagStream, TableCoderRoundTrips) {
-  for (const std::string mode : {"leaves", "mipmap"}) {
-    const Svdag dag = DecodeDag(ReadSeed(mode + "_spatial_v5.bin")).value();
-    const std::vector<uint8_t> table = ReadSeed(mode + "_table.bin");
-    ASSERT_EQ(table.at(0), kTableStreamVersion);
-    ASSERT_EQ(table.at(1), 3);
-    EXPECT_EQ(DecodeDag(table).value(), dag);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value(), table);
-  }
+  ExpectSeedsHoldVersion5sDag("_table.bin", kTableStreamVersion);
   ExpectTableCoderRoundTripsAtEveryDepth(kTableStreamVersion, 3000, 0);
   const Svdag dag = Build(6, 2000, 4);
   EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable).status().code(), StatusCode::kInvalidArgument);
@@ -220,15 +226,7 @@ TEST(DagStream, TableCoderRoundTrips) {
 // at every depth; the masks cost what version 6's cost; every cut or flip ends in a typed status or a
 // valid DAG.
 TEST(DagStream, PrefixCodedReferencesRoundTrip) {
-  for (const std::string mode : {"leaves", "mipmap"}) {
-    const Svdag dag = DecodeDag(ReadSeed(mode + "_spatial_v5.bin")).value();
-    const std::vector<uint8_t> v7 = ReadSeed(mode + "_table_v7.bin");
-    ASSERT_EQ(v7.at(0), kPrefixRefsStreamVersion);
-    ASSERT_EQ(v7.at(1), 3);
-    EXPECT_EQ(DecodeDag(v7).value(), dag);
-    EXPECT_EQ(EncodeDag(dag, GeometryCoder::kTable, kPrefixRefsStreamVersion).value(), v7);
-    EXPECT_EQ(ReadSeed(mode + "_table.bin"), EncodeDag(dag, GeometryCoder::kTable, kTableStreamVersion).value()) << "version 6 unchanged";
-  }
+  ExpectSeedsHoldVersion5sDag("_table_v7.bin", kPrefixRefsStreamVersion);
   ExpectTableCoderRoundTripsAtEveryDepth(kPrefixRefsStreamVersion, 6000, 40);
   EXPECT_EQ(EncodeDag(Build(6, 2000, 4), GeometryCoder::kSpatial, kPrefixRefsStreamVersion).status().code(), StatusCode::kInvalidArgument);
   const auto good = EncodeDag(Build(8, 4000, 9), GeometryCoder::kTable, kPrefixRefsStreamVersion).value();

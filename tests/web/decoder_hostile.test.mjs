@@ -244,28 +244,21 @@ describe('geometry stream versions', () => {
       }
     }
   });
-  // Coder 3 (version 6, the tiles' stream): the seeds hold version 5's DAG; every cut is refused (the
-  // prefix-coded masks end the stream, without flush bytes); flips end in a PdagError or a valid DAG.
-  test('coder 3 decodes to the same DAG, and cut or flipped fails cleanly', () => {
-    for (const mode of ['leaves', 'mipmap']) {
-      const stream = seed(`${mode}_table.bin`);
-      assert.equal(stream[0], 6);
-      assert.equal(stream[1], 3);
-      assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
-    }
-    cutsAndFlipsFailCleanly(seed('leaves_table.bin'), 6, () => true);
-  });
-  // Version 7 (coder 3 with prefix-coded references, the tiles' stream since fixship): the same DAG,
-  // and cut or flipped it fails cleanly too (C++: DagStream.PrefixCodedReferencesRoundTrip).
-  test('coder 3 version 7 decodes to the same DAG, and cut or flipped fails cleanly', () => {
-    for (const mode of ['leaves', 'mipmap']) {
-      const stream = seed(`${mode}_table_v7.bin`);
-      assert.equal(stream[0], 7);
-      assert.equal(stream[1], 3);
-      assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
-    }
-    cutsAndFlipsFailCleanly(seed('leaves_table_v7.bin'), 7, () => true);
-  });
+  // Coder 3 in version 6 and in version 7 (prefix-coded references, the tiles' stream since fixship):
+  // the seeds hold version 5's DAG; every cut is refused (the prefix-coded masks end the stream,
+  // without flush bytes); flips end in a PdagError or a valid DAG (C++: DagStream.TableCoderRoundTrips,
+  // DagStream.PrefixCodedReferencesRoundTrip).
+  for (const [suffix, version] of [['table', 6], ['table_v7', 7]]) {
+    test(`coder 3 version ${version} decodes to the same DAG, and cut or flipped fails cleanly`, () => {
+      for (const mode of ['leaves', 'mipmap']) {
+        const stream = seed(`${mode}_${suffix}.bin`);
+        assert.equal(stream[0], version);
+        assert.equal(stream[1], 3);
+        assert.deepEqual(decodeDag(stream), decodeDag(seed(`${mode}_spatial_v5.bin`)), mode);
+      }
+      cutsAndFlipsFailCleanly(seed(`leaves_${suffix}.bin`), version, () => true);
+    });
+  }
   // Version 5 merges the slots it decodes: a cut or flipped stream must still end in a PdagError or
   // in some valid DAG, never in an exception of another kind.
   test('version 5 cut or flipped fails cleanly', () => {
