@@ -42,7 +42,11 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limit
   out.grid.morton = out.dag.MortonCodes();
   if (out.grid.morton.size() != voxels) return Corrupt(".pdag metadata voxel count disagrees with its geometry");
   if (!file.colors.empty()) {
-    if (out.dag.mode == CountMode::kMipmap) {
+    const bool voxel_colors_only = (file.colors[0] & kVoxelColorsOnly) != 0;
+    if (voxel_colors_only && out.dag.mode != CountMode::kMipmap) {
+      return Corrupt(".pdag colors section marks voxel colors only (codec bit 7) in leaf mode");
+    }
+    if (out.dag.mode == CountMode::kMipmap && !voxel_colors_only) {
       ASSIGN_OR_RETURN(out.mip_colors, DecodeColors(file.colors, root_count));
       ASSIGN_OR_RETURN(out.grid.colors, MipVoxelColors(out.grid.morton, out.grid.depth, out.mip_colors));
     } else {

@@ -3,7 +3,6 @@
 #include <chrono>
 
 #include "pointdag/color/block_codec.h"
-#include "pointdag/color/mip_colors.h"
 #include "pointdag/dag/dag_builder.h"
 
 namespace pointdag {
@@ -35,15 +34,10 @@ Status EncodeAfterDag(const EncodeOptions& options, EncodedScan& out) {
 
   start = std::chrono::steady_clock::now();
   if (out.grid.has_color()) {
-    if (options.mipmap) {
-      // The target is asked of the voxels' colors (node colors ride along): the search measures
-      // only those, so one search meets it (a search over every node's colors landed under it on
-      // the voxels and had to be repeated with a higher target).
-      const MipColors mip = BuildMipColors(out.grid.morton, out.grid.colors, out.grid.depth);
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(mip.colors, options.colors, {}, mip.voxel_index));
-    } else {
-      ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors, out.grid.morton));
-    }
+    // Mipmap mode stores the voxels' colors as leaf mode does, flagged: the internal nodes' are
+    // their children's means, derived by a reader that wants them (kVoxelColorsOnly).
+    ASSIGN_OR_RETURN(out.colors, EncodeColors(out.grid.colors, options.colors, out.grid.morton));
+    if (options.mipmap) out.colors.bytes[0] |= kVoxelColorsOnly;
     out.file.colors = out.colors.bytes;
   }
   out.seconds.colors = SecondsSince(start);

@@ -74,7 +74,10 @@ struct DecodedPdag {
   nlohmann::json meta;
   Svdag dag;
   VoxelGrid grid;               // Morton codes from the DAG, voxel colors from the colors section
-  std::vector<Rgb8> mip_colors;  // mipmap mode: every node's color in pre-order (index = MipColorIndex)
+  // Mipmap mode, files that store every node's color (written before voxel-only sections,
+  // kVoxelColorsOnly): those, in pre-order (index = MipColorIndex). Otherwise empty:
+  // BuildMipColors(grid.morton, grid.colors, grid.depth) derives them.
+  std::vector<Rgb8> mip_colors;
 };
 
 // What a decode may produce, whatever the file declares: a .pdag of a few hundred bytes can

@@ -564,7 +564,9 @@ TEST(MipColors, EveryNodeIsTheMeanOfItsChildrenAtItsDagIndex) {
   EXPECT_EQ(checked + codes.size(), m.colors.size());  // every node checked once
 }
 
-TEST(MipColors, MipmapPipelineRoundTripsVoxelColorsAndEveryNode) {
+// Mipmap files store the voxels' colors only (bit 7 of the codec byte); every node's color is
+// derived from them by a reader that wants it.
+TEST(MipColors, MipmapFilesStoreTheVoxelColorsOnly) {
   SKIP_WITHOUT_DATA();
   EncodeOptions options;
   options.voxel_size = 0.004;
@@ -573,11 +575,61 @@ TEST(MipColors, MipmapPipelineRoundTripsVoxelColorsAndEveryNode) {
   ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
   EXPECT_EQ(encoded->dag.mode, CountMode::kMipmap);
   EXPECT_EQ(encoded->file.meta["codec"]["count_mode"], "mipmap");
+  EXPECT_EQ(encoded->file.colors[0], kVoxelColorsOnly | static_cast<uint8_t>(ColorCodec::kLossless));
   auto decoded = DecodePdag(*ParsePdag(SerializePdag(encoded->file)));
   ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
   EXPECT_EQ(decoded->grid.colors, encoded->grid.colors);  // lossless by default
-  EXPECT_EQ(decoded->mip_colors.size(), decoded->dag.RootCount());
-  EXPECT_EQ(decoded->mip_colors, BuildMipColors(encoded->grid.morton, encoded->grid.colors, encoded->grid.depth).colors);
+  EXPECT_TRUE(decoded->mip_colors.empty());
+}
+
+// The form written before: every node's color in pre-order (bit 7 clear). Readers still read it,
+// taking each voxel's color at its pre-order rank.
+TEST(MipColors, FilesStoringEveryNodesColorStillDecode) {
+  const int depth = 6;
+  std::vector<uint64_t> codes;
+  std::vector<Rgb8> colors;
+  for (uint64_t code = 3; code < (uint64_t{1} << (3 * depth)); code += 37 + code % 11) {
+    codes.push_back(code);
+    colors.push_back({static_cast<uint8_t>(code), static_cast<uint8_t>(code >> 5), static_cast<uint8_t>(code >> 9)});
+  }
+  VoxelGrid grid;
+  grid.depth = depth;
+  grid.voxel_size = 1;
+  grid.morton = codes;
+  grid.colors = colors;
+  EncodeOptions options;
+  options.mipmap = true;
+  auto encoded = EncodeGrid(grid, ScanInfo{}, "mip", options);
+  ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+  const MipColors mip = BuildMipColors(codes, colors, depth);
+  for (ColorEncodeOptions codec : {ColorEncodeOptions{ColorCodec::kRaw, std::nullopt}, ColorEncodeOptions{ColorCodec::kVariableRate, 36.0}}) {
+    auto every_node = EncodeColors(mip.colors, codec, {}, mip.voxel_index);
+    ASSERT_TRUE(every_node.ok()) << every_node.status().ToString();
+    ASSERT_EQ(every_node->bytes[0] & kVoxelColorsOnly, 0);
+    encoded->file.colors = every_node->bytes;
+    auto decoded = DecodePdag(*ParsePdag(SerializePdag(encoded->file)));
+    ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
+    ASSERT_EQ(decoded->mip_colors.size(), decoded->dag.RootCount());
+    for (size_t i = 0; i < codes.size(); ++i) ASSERT_EQ(decoded->grid.colors[i], decoded->mip_colors[mip.voxel_index[i]]);
+    if (codec.codec == ColorCodec::kRaw) {
+      EXPECT_EQ(decoded->mip_colors, mip.colors);
+    }
+  }
+}
+
+TEST(MipColors, LeafModeSectionMarkedVoxelColorsOnlyIsCorrupt) {
+  VoxelGrid grid;
+  grid.depth = 4;
+  grid.voxel_size = 1;
+  grid.morton = {1, 2, 40, 300};
+  grid.colors = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}, {10, 11, 12}};
+  auto encoded = EncodeGrid(grid, ScanInfo{}, "leaf", EncodeOptions{});
+  ASSERT_TRUE(encoded.ok()) << encoded.status().ToString();
+  encoded->file.colors[0] |= kVoxelColorsOnly;
+  auto decoded = DecodePdag(*ParsePdag(SerializePdag(encoded->file)));
+  ASSERT_FALSE(decoded.ok());
+  EXPECT_EQ(decoded.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(decoded.status().message().find("leaf mode"), std::string::npos) << decoded.status().ToString();
 }
 
 }  // namespace

@@ -192,6 +192,19 @@ describe('hostile tiles', () => {
             'Corrupt', 'block colors for 19 million nodes in 1500 bytes');
   });
 
+  test('voxel colors only (codec bit 7): read in mipmap mode, refused in leaf mode', () => {
+    // The solid cube of side 4: 64 voxels; in mipmap mode 73 nodes (the brick, its 8 cells, the voxels).
+    const raw = (codecByte) => new Uint8Array([codecByte, ...Array.from({ length: 3 * 64 }, (_, i) => (7 * i) & 0xff)]);
+    const cube = (mode, colors) => framePdag([['meta', meta({ voxels: 64, depth: 2 })], ['geometry', writeGeometry(denseCube(2, mode))],
+                                              ['colors', colors]]);
+    const decoded = both(cube(1, raw(0x80)), 'voxel colors of a mipmap cube');
+    assert.equal(decoded.code, 'ok', decoded.message);
+    assert.deepEqual(decoded.value.colors, raw(0x80).subarray(1));
+    refused(cube(0, raw(0x80)), 'Corrupt', 'voxel colors only in leaf mode');
+    refused(cube(1, raw(0)), 'Corrupt', 'the voxels\' colors where every node\'s are declared');
+    assert.equal(both(cube(0, raw(0)), 'voxel colors of a leaf cube').code, 'ok');
+  });
+
   test('formats these decoders do not read are Unsupported, not Corrupt', () => {
     const sections = sectionsOf(tile);
     const withSection = (tag, change) => framePdag(sections.map(([name, d]) => [name, name === tag ? change(d.slice()) : d]));

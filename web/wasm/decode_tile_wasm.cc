@@ -67,13 +67,14 @@ pointdag::Status RefuseUnsupported(const pointdag::PdagFile& file) {
     return pointdag::Unsupported("the geometry stream is zstd-coded; this decoder reads the range coders only");
   }
   if (file.colors.empty()) return pointdag::Status::Ok();
-  switch (static_cast<pointdag::ColorCodec>(file.colors[0])) {
+  const uint8_t codec = file.colors[0] & ~pointdag::kVoxelColorsOnly;
+  switch (static_cast<pointdag::ColorCodec>(codec)) {
     case pointdag::ColorCodec::kLossless: return pointdag::Unsupported("lossless (zstd) colors are not read by this decoder");
     case pointdag::ColorCodec::kPng:
     case pointdag::ColorCodec::kJpeg:
     case pointdag::ColorCodec::kWebp:
     case pointdag::ColorCodec::kAstc:
-      return pointdag::Unsupported("image-mapped colors (codec " + std::to_string(file.colors[0]) +
+      return pointdag::Unsupported("image-mapped colors (codec " + std::to_string(codec) +
                                    ": png, jpeg, webp or astc) are not read by this decoder");
     case pointdag::ColorCodec::kHierarchical:
       return pointdag::Unsupported("hierarchical colors (codec 8) are not read by this decoder");

@@ -64,6 +64,14 @@ StatusOr<EncodedColors> EncodeColors(std::span<const Rgb8> colors, const ColorEn
 // Color indices are 32-bit in the block codec and the DAG's counts: the most a section may hold.
 constexpr uint64_t kMaxColors = uint64_t{1} << 32;
 
+// Bit 7 of a colors section's first byte (the codec's number is the other seven): the section of a
+// mipmap-mode file holds only the voxels' colors, one per voxel in Morton order, as in leaf mode;
+// every internal node's color is derived, not stored: the rounded mean of its children's
+// (BuildMipColors over the decoded voxel colors). Coded node colors cost tiles 3-14 % of their
+// bytes and their decoders a color per node, for means a client computes when it wants them.
+// Leaf-mode sections never set it.
+constexpr uint8_t kVoxelColorsOnly = 0x80;
+
 // Decodes a colors section that must hold `count` colors (1..kMaxColors). `count` must come from
 // decoded geometry, never from metadata alone: the decoders allocate by it. `morton`: as for
 // EncodeColors (a lossless section coded with them cannot be decoded without them).

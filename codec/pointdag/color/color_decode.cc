@@ -39,7 +39,7 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
   if (count == 0) return Corrupt("a colors section for no voxels");
   if (count > kMaxColors) return ResourceLimit(std::to_string(count) + " colors are more than a colors section may hold");
   const auto payload = section.subspan(1);
-  switch (static_cast<ColorCodec>(section[0])) {
+  switch (static_cast<ColorCodec>(section[0] & ~kVoxelColorsOnly)) {
     case ColorCodec::kRaw: {
       if (payload.size() != 3 * count) return Corrupt("raw colors do not hold one RGB per voxel");
       std::vector<Rgb8> colors(count);
@@ -63,7 +63,7 @@ StatusOr<std::vector<Rgb8>> DecodeColors(std::span<const uint8_t> section, uint6
     case ColorCodec::kHierarchical:
       return DecodeHierarchicalColors(payload, count, morton);
   }
-  return Corrupt("colors section names unknown codec " + std::to_string(section[0]));
+  return Corrupt("colors section names unknown codec " + std::to_string(section[0] & ~kVoxelColorsOnly));
 }
 
 }  // namespace pointdag

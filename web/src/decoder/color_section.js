@@ -12,6 +12,9 @@ export const CODEC_VBR = 3;
 const IMAGE_CODECS = new Set([4, 5, 6, 7]);  // png, jpeg, webp, astc
 export const CODEC_HIERARCHICAL = 8;
 const MAX_COLORS = 2 ** 32;
+// Bit 7 of the first byte (kVoxelColorsOnly in color_codec.h): a mipmap-mode file's section holds
+// only the voxels' colors, in Morton order; the internal nodes' are derived, not stored.
+export const VOXEL_COLORS_ONLY = 0x80;
 
 // Why this decoder cannot read a colors section with this codec byte, or null when it can.
 export function unsupportedColorCodec(codec) {
@@ -28,7 +31,7 @@ export function decodeColors(section, count, coords = null) {
   if (section.length === 0) throw corrupt('colors section is empty');
   if (count === 0) throw corrupt('a colors section for no voxels');
   if (count > MAX_COLORS) throw resourceLimit(`${count} colors are more than a colors section may hold`);
-  const codec = section[0];
+  const codec = section[0] & ~VOXEL_COLORS_ONLY;
   const payload = section.subarray(1);
   if (codec === CODEC_RAW) {
     if (payload.length !== 3 * count) throw corrupt('raw colors do not hold one RGB per voxel');

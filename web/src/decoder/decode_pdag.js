@@ -7,7 +7,7 @@
 //          coords: Uint16Array(3 * count) (Uint32Array when depth > 16), cell (i, j, k) per voxel in Morton order,
 //          colors: Uint8Array(3 * count) | null}.
 // Voxel centre = origin + (coord + 0.5) * voxelSize. Throws PdagError ('Corrupt', 'ResourceLimit', 'Unsupported').
-import { decodeColors, unsupportedColorCodec } from './color_section.js';
+import { VOXEL_COLORS_ONLY, decodeColors, unsupportedColorCodec } from './color_section.js';
 import { COUNT_LEAVES, MAX_DEPTH, decodeDag } from './dag_stream.js';
 import { enumerateVoxels } from './dag_voxels.js';
 import { COMPACT_SPATIAL_VERSION } from './spatial_coder.js';
@@ -27,7 +27,7 @@ export function refuseUnsupported(geometry, colors) {
   if (geometry.length >= 2 && geometry[0] !== COMPACT_SPATIAL_VERSION && geometry[1] === 0) {
     throw unsupported('the geometry stream is zstd-coded; this decoder reads the range coders only');
   }
-  const why = colors ? unsupportedColorCodec(colors[0]) : null;
+  const why = colors ? unsupportedColorCodec(colors[0] & ~VOXEL_COLORS_ONLY) : null;
   if (why) throw unsupported(`${why} are not read by this decoder`);
 }
 
@@ -56,7 +56,11 @@ export function decodePdag(bytes, limits = DEFAULT_LIMITS) {
   }
   if (dag.rootVoxels !== voxels) throw corrupt('.pdag metadata voxel count disagrees with its geometry');
   let coords, colors;
-  if (file.colors && dag.mode === COUNT_LEAVES) {
+  const voxelColorsOnly = file.colors !== null && (file.colors[0] & VOXEL_COLORS_ONLY) !== 0;
+  if (voxelColorsOnly && dag.mode === COUNT_LEAVES) {
+    throw corrupt('.pdag colors section marks voxel colors only (codec bit 7) in leaf mode');
+  }
+  if (file.colors && (dag.mode === COUNT_LEAVES || voxelColorsOnly)) {
     // One color per voxel in Morton order: the colors' spatial contexts need the voxels first.
     ({ coords } = enumerateVoxels(dag, voxels, null));
     colors = decodeColors(file.colors, voxels, coords);
