@@ -52,7 +52,7 @@ Status Run(const std::string& scan, double voxel, int passes, const std::string&
     decoded.Add(&d.grid.origin, sizeof(d.grid.origin));
     decoded.Add(&d.grid.voxel_size, sizeof(d.grid.voxel_size));
     if (!write_dir.empty()) {
-      char name[16];
+      char name[32];
       std::snprintf(name, sizeof(name), "%04zu.pdag", i);
       std::filesystem::create_directories(write_dir);
       RETURN_IF_ERROR(WriteFileAtomically(std::filesystem::path(write_dir) / name, tile.bytes));
