@@ -5,7 +5,6 @@
 //   tile_decode_bench SCAN VOXEL [PASSES] [--write DIR]
 // --write keeps the tiles as DIR/NNNN.pdag, for decode_native_bench or callgrind.
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include "pointdag/container/pdag_file.h"
 #include "pointdag/pipeline.h"
 #include "pointdag/tile/tiler.h"
+#include "tile_decode_time.h"
 
 using namespace pointdag;
 
@@ -58,16 +58,7 @@ Status Run(const std::string& scan, double voxel, int passes, const std::string&
       RETURN_IF_ERROR(WriteFileAtomically(std::filesystem::path(write_dir) / name, tile.bytes));
     }
   }
-  double best = 0;
-  for (int pass = 0; pass < passes; ++pass) {
-    const auto start = std::chrono::steady_clock::now();
-    for (const Tile& tile : tiles.tiles) {
-      ASSIGN_OR_RETURN(const PdagFile file, ParsePdag(tile.bytes));
-      RETURN_IF_ERROR(DecodePdag(file).status());
-    }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (pass == 0 || seconds < best) best = seconds;
-  }
+  ASSIGN_OR_RETURN(const double best, BestTileDecodeSeconds(tiles, passes));
   std::printf("%s @ %g: %zu tiles, %llu voxels, %llu bytes; best of %d passes %.3f ms, %.2f us/tile, %.3f Mpoints/s;"
               " tiles %016llx decoded %016llx\n",
               std::filesystem::path(scan).filename().c_str(), voxel, tiles.tiles.size(), static_cast<unsigned long long>(points),
