@@ -30,7 +30,7 @@ StatusOr<ShadowInput> LoadShadowInput(const std::filesystem::path& path, std::op
     if (voxel_size || depth) return InvalidArgument("a .pdag has its own grid; --voxel and --depth are for scans");
     ASSIGN_OR_RETURN(PdagFile file, ReadPdag(path));
     ASSIGN_OR_RETURN(DecodedPdag decoded, DecodePdag(file));
-    RETURN_IF_ERROR(ReadFrame(decoded.meta, out));
+    RETURN_IF_ERROR(ReadFrame(file.meta, out));
     out.grid = std::move(decoded.grid);
     out.dag = std::move(decoded.dag);
   } else {

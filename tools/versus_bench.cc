@@ -5,7 +5,6 @@
 #include <stdlib.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -19,6 +18,7 @@
 
 #include "bench.h"
 #include "process_time.h"
+#include "tile_decode_time.h"
 #include "pointdag/bench/report.h"
 #include "pointdag/compare/draco_compare.h"
 #include "pointdag/container/pdag_file.h"
@@ -90,16 +90,7 @@ StatusOr<double> TileDecodeRate(const VoxelGrid& grid) {
   ASSIGN_OR_RETURN(const TileSet tiles, BuildTiles(grid, ScanInfo{}, "versus", TilingOptions{}));
   double points = 0;
   for (const Tile& tile : tiles.tiles) points += static_cast<double>(tile.voxels);
-  double best = 0;
-  for (int pass = 0; pass < 3; ++pass) {
-    const auto start = std::chrono::steady_clock::now();
-    for (const Tile& tile : tiles.tiles) {
-      ASSIGN_OR_RETURN(const PdagFile file, ParsePdag(tile.bytes));
-      RETURN_IF_ERROR(DecodePdag(file).status());
-    }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (pass == 0 || seconds < best) best = seconds;
-  }
+  ASSIGN_OR_RETURN(const double best, BestTileDecodeSeconds(tiles, 3));
   return points / best;
 }
 

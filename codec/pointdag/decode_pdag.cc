@@ -14,7 +14,6 @@ StatusOr<DecodedPdag> DecodePdag(const PdagFile& file, const DecodeLimits& limit
   // decoder, and must then equal what the geometry really holds before anything is enumerated.
   const JsonFields meta(file.meta, ".pdag metadata");
   DecodedPdag out;
-  out.meta = file.meta;
   ASSIGN_OR_RETURN(const uint64_t voxels, meta.Uint("voxels", std::numeric_limits<uint64_t>::max()));
   if (voxels > limits.max_voxels) {
     return ResourceLimit(".pdag declares " + std::to_string(voxels) + " voxels, more than the " +

@@ -70,8 +70,8 @@ nlohmann::json DescribeScan(const std::string& source_name, const ScanInfo& scan
                             const Svdag& dag, GeometryCoder coder, const EncodedColors& colors,
                             const ColorEncodeOptions& color_options);
 
+// The metadata stays in the PdagFile it was parsed into: a decode copies none of it.
 struct DecodedPdag {
-  nlohmann::json meta;
   Svdag dag;
   VoxelGrid grid;               // Morton codes from the DAG, voxel colors from the colors section
   // Mipmap mode, files that store every node's color (written before voxel-only sections,

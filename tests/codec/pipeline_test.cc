@@ -35,7 +35,7 @@ TEST_P(PipelineTest, RoundTripIsExact) {
     EXPECT_EQ(decoded->grid.depth, encoded->grid.depth);
     EXPECT_EQ(decoded->grid.origin, encoded->grid.origin);  // JSON doubles round-trip exactly
     EXPECT_EQ(decoded->grid.voxel_size, encoded->grid.voxel_size);
-    EXPECT_EQ(decoded->meta["voxels"], encoded->grid.morton.size());
+    EXPECT_EQ(parsed->meta["voxels"], encoded->grid.morton.size());
   }
 }
 

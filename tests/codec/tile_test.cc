@@ -95,8 +95,8 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
       EXPECT_EQ(file->colors[1], kFixedWeightCodesVersion) << "and the faster-decoding block color stream";
       auto decoded = DecodePdag(*file);
       ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
-      EXPECT_EQ(decoded->meta["tile"]["level"], level);
-      EXPECT_EQ(decoded->meta["tile"]["x"], t.key.x);
+      EXPECT_EQ(file->meta["tile"]["level"], level);
+      EXPECT_EQ(file->meta["tile"]["x"], t.key.x);
       EXPECT_EQ(decoded->grid.morton.size(), t.voxels);
       EXPECT_DOUBLE_EQ(decoded->grid.voxel_size, expected.voxel_size);
       const double span = 256 * expected.voxel_size;

@@ -108,7 +108,7 @@ EMSCRIPTEN_KEEPALIVE Result* pdag_decode(const uint8_t* bytes, uint32_t size, do
   auto decoded = pointdag::DecodePdag(*file, limits);
   if (!decoded.ok()) return Fail(r, decoded.status());
   const pointdag::VoxelGrid& grid = decoded->grid;
-  r->meta = pointdag::DumpJson(decoded->meta);
+  r->meta = pointdag::DumpJson(file->meta);
   r->depth = grid.depth;
   r->voxel_size = grid.voxel_size;
   for (int a = 0; a < 3; ++a) r->origin[a] = grid.origin[a];

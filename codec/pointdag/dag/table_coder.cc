@@ -1,5 +1,7 @@
 #include "pointdag/dag/table_coder.h"
 
+#include <string>
+
 #include "pointdag/entropy/varint.h"
 
 namespace pointdag {
@@ -21,7 +23,7 @@ StatusOr<std::vector<uint8_t>> TableSink::Finish(std::vector<uint8_t> out) {
     }
   }
   BinaryRangeEncoder rc;
-  TableModels models(depth_ + 1);
+  TableModels models(depth_ + 1, prefix_refs_);
   std::vector<PrefixEncoder> codes;
   codes.reserve(freq.size());
   std::array<uint8_t, 256> plain{};
@@ -62,21 +64,26 @@ Status TableSource::Open(std::span<const uint8_t> payload, int depth, bool prefi
   uint64_t ranged = 0;
   if (!GetVarint(payload, pos, ranged)) return Truncated("geometry stream ends inside its section length");
   if (ranged > payload.size() - pos) return Truncated("geometry stream is shorter than its section length says");
-  rc_ = std::make_unique<BinaryRangeDecoder>(payload.subspan(pos, ranged));
-  masks_ = std::make_unique<PrefixDecoder>(payload.subspan(pos + ranged));
-  models_ = std::make_unique<TableModels>(depth + 1);
-  tables_.resize(static_cast<size_t>(depth) + 1);
-  std::array<uint8_t, 256> lengths{};
-  for (int cls = 1; cls <= depth; ++cls) {
-    if (!ReadCodeLengths(*rc_, models_->code, kFirstSymbol, lengths).ok()) {
-      return Corrupt("geometry stream holds a mask code longer than 12 bits");
+  rc_.emplace(payload.subspan(pos, ranged));
+  masks_.emplace(payload.subspan(pos + ranged));
+  models_ = std::make_unique<TableModels>(depth + 1, prefix_refs);
+  // The codes sent with the stream, one table each; classes of 8 bits a mask share the plain table.
+  const auto read_code = [&](int first, const PrefixTable*& table) -> Status {
+    std::array<uint8_t, 256> lengths;
+    const StatusOr<bool> sent = ReadCodeLengths(*rc_, models_->code, first, lengths);
+    if (!sent.ok()) return Corrupt(std::string("geometry stream holds a ") + (first ? "mask" : "reference") + " code longer than 12 bits");
+    if (!*sent) {
+      table = &PlainPrefixTable(first);
+      return Status::Ok();
     }
-    RETURN_IF_ERROR(BuildPrefixTable(lengths, tables_[cls]));
-  }
-  if (prefix_refs) {
-    if (!ReadCodeLengths(*rc_, models_->code, 0, lengths).ok()) return Corrupt("geometry stream holds a reference code longer than 12 bits");
-    RETURN_IF_ERROR(BuildPrefixTable(lengths, ref_table_));
-  }
+    RETURN_IF_ERROR(BuildPrefixTable(lengths, built_.emplace_back()));
+    table = &built_.back();
+    return Status::Ok();
+  };
+  built_.reserve(static_cast<size_t>(depth) + 1);  // every code of the stream: the pointers stay valid
+  tables_.assign(static_cast<size_t>(depth) + 1, &PlainPrefixTable(kFirstSymbol));
+  for (int cls = 1; cls <= depth; ++cls) RETURN_IF_ERROR(read_code(kFirstSymbol, tables_[cls]));
+  if (prefix_refs) RETURN_IF_ERROR(read_code(0, ref_table_));
   if (rc_->overrun()) return Truncated("geometry stream ends inside its code tables");
   return Status::Ok();
 }

@@ -10,6 +10,7 @@
 #include <bit>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -26,7 +27,8 @@ constexpr uint64_t kMaxTableNodesPerByte = 8;
 // Models of the range-coded section, fresh per stream: the code lengths of the mask classes, then
 // flags and references (as coder 1's). `classes`: the depth D + 1 (classes 1..D).
 struct TableModels {
-  explicit TableModels(int classes) : flag(classes), ref(classes) {}
+  // Version 7 (`prefix_refs`) range-codes no references: no gamma models (10 KB a tile) to set up.
+  TableModels(int classes, bool prefix_refs) : flag(classes), ref(prefix_refs ? 0 : classes) {}
   CodeLengthModels code;  // each class's code lengths (or 8 bits a mask)
   std::vector<BitModel> flag;
   std::vector<GammaModel> ref;
@@ -75,14 +77,14 @@ class TableSource {
   // Reads the section lengths and the code tables from `payload` (all that follows the level table).
   Status Open(std::span<const uint8_t> payload, int depth, bool prefix_refs);
   uint8_t Mask(int cls) {
-    const int s = masks_->Get(tables_[cls]);
+    const int s = masks_->Get(*tables_[cls]);
     failed_ |= s < 0;
     return static_cast<uint8_t>(s < 0 ? 0 : s);
   }
   bool Flag(int cls) { return rc_->Decode(models_->flag[cls]) != 0; }
   uint32_t Ref(int cls, uint32_t bound) {
     if (!prefix_refs_) return DecodeGamma(*rc_, models_->ref[cls], std::bit_width(bound)) - 1;
-    const int s = masks_->Get(ref_table_);
+    const int s = masks_->Get(*ref_table_);
     const int length = std::bit_width(bound) - (s >> 2), top = std::min(length - 1, 2);
     if (s < 0 || length < 1 || (s & 3) >> top) {
       failed_ = true;
@@ -94,12 +96,13 @@ class TableSource {
   bool failed() const { return failed_ || rc_->overrun() || masks_->overrun(); }
 
  private:
-  std::vector<PrefixTable> tables_;
-  PrefixTable ref_table_;
+  std::vector<PrefixTable> built_;  // the tables of the codes sent
+  std::vector<const PrefixTable*> tables_;
+  const PrefixTable* ref_table_ = nullptr;
   bool prefix_refs_ = false;
   std::unique_ptr<TableModels> models_;
-  std::unique_ptr<BinaryRangeDecoder> rc_;
-  std::unique_ptr<PrefixDecoder> masks_;
+  std::optional<BinaryRangeDecoder> rc_;
+  std::optional<PrefixDecoder> masks_;
   bool failed_ = false;
 };
 

@@ -30,10 +30,19 @@ void EncodeBitTree(BinaryRangeEncoder& rc, BitTreeModel<kBits>& m, uint32_t valu
   }
 }
 
+// Both children's probabilities are read while the bit between them is decoded: the next decision
+// then waits on a select, not on a load whose address that bit chooses.
 template <int kBits>
 uint32_t DecodeBitTree(BinaryRangeDecoder& rc, BitTreeModel<kBits>& m, int bits = kBits) {
-  uint32_t node = 1;
-  for (int i = 0; i < bits; ++i) node = node << 1 | static_cast<uint32_t>(rc.Decode(m.node[node]));
+  uint32_t node = 1, p0 = m.node[1].P0();
+#pragma GCC unroll 8
+  for (int i = 1; i < bits; ++i) {
+    const uint32_t zero = m.node[2 * node].P0(), one = m.node[2 * node + 1].P0();
+    const uint32_t bit = static_cast<uint32_t>(rc.Decode(m.node[node], p0));
+    node = node << 1 | bit;
+    p0 = bit ? one : zero;
+  }
+  if (bits > 0) node = node << 1 | static_cast<uint32_t>(rc.Decode(m.node[node], p0));
   return node - (1u << bits);
 }
 

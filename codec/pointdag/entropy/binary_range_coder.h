@@ -181,7 +181,12 @@ class BinaryRangeDecoder {
   // Branch-free: the bit is a coin toss to the branch predictor, selects are not.
   template <typename Model>
   int Decode(Model& m) {
-    const uint32_t bound = (range_ >> 12) * m.P0();
+    return Decode(m, m.P0());
+  }
+  // With `p0` = m.P0() read beforehand (DecodeBitTree reads both children's before their parent's bit).
+  template <typename Model>
+  int Decode(Model& m, uint32_t p0) {
+    const uint32_t bound = (range_ >> 12) * p0;
     const bool one = code_ >= bound;
     code_ -= one ? bound : 0u;
     range_ = one ? range_ - bound : bound;

@@ -24,8 +24,13 @@ struct CodeLengthModels {
 std::array<uint8_t, 256> WriteCodeLengths(BinaryRangeEncoder& rc, CodeLengthModels& m, const std::array<uint64_t, 256>& freq,
                                           int first);
 
-// Reads what WriteCodeLengths wrote (symbols below `first` get length 0); kCorrupt for a length
-// above kPrefixCodeBits.
-Status ReadCodeLengths(BinaryRangeDecoder& rc, CodeLengthModels& m, int first, std::array<uint8_t, 256>& lengths);
+// Reads what WriteCodeLengths wrote (symbols below `first` get length 0): true when the lengths were
+// sent, false for 8 bits a symbol (whose table PlainPrefixTable holds); kCorrupt for a length above
+// kPrefixCodeBits.
+StatusOr<bool> ReadCodeLengths(BinaryRangeDecoder& rc, CodeLengthModels& m, int first, std::array<uint8_t, 256>& lengths);
+
+// The table of 8 bits a symbol for symbols `first` (0 or 1) to 255, built once per process: most
+// classes of a small tile's masks send no lengths, and each would otherwise build this table again.
+const PrefixTable& PlainPrefixTable(int first);
 
 }  // namespace pointdag

@@ -73,15 +73,22 @@ std::vector<uint8_t> BitWriter::Finish() {
 
 namespace {
 
+// How many symbols take each length; lengths above kPrefixCodeBits all count as kPrefixCodeBits + 1.
+using LengthCounts = std::array<uint32_t, kPrefixCodeBits + 2>;
+
+LengthCounts CountLengths(const std::array<uint8_t, 256>& lengths) {
+  LengthCounts count{};
+  for (uint8_t len : lengths) ++count[std::min<int>(len, kPrefixCodeBits + 1)];
+  return count;
+}
+
 // Canonical codes: by length, then symbol; each the previous plus one, shifted left as lengths grow.
 // The first code of each length from a count of the lengths, then the symbols in one pass (DEFLATE's
 // way; a pass over the symbols per length was most of a small tile's table building).
 template <typename Visit>
-void CanonicalCodes(const std::array<uint8_t, 256>& lengths, Visit visit) {
-  std::array<uint32_t, kPrefixCodeBits + 1> count{}, next{};
-  for (uint8_t len : lengths) ++count[len];
-  count[0] = 0;
-  for (int len = 1; len <= kPrefixCodeBits; ++len) next[len] = (next[len - 1] + count[len - 1]) << 1;
+void CanonicalCodes(const std::array<uint8_t, 256>& lengths, const LengthCounts& count, Visit visit) {
+  std::array<uint32_t, kPrefixCodeBits + 1> next{};
+  for (int len = 2; len <= kPrefixCodeBits; ++len) next[len] = (next[len - 1] + count[len - 1]) << 1;
   for (int s = 0; s < 256; ++s) {
     if (lengths[s] > 0) visit(s, lengths[s], next[lengths[s]]++);
   }
@@ -90,19 +97,26 @@ void CanonicalCodes(const std::array<uint8_t, 256>& lengths, Visit visit) {
 }  // namespace
 
 PrefixEncoder::PrefixEncoder(const std::array<uint8_t, 256>& lengths) : lengths_(lengths) {
-  CanonicalCodes(lengths, [&](int s, int, uint32_t code) { code_[s] = static_cast<uint16_t>(code); });
+  CanonicalCodes(lengths, CountLengths(lengths), [&](int s, int, uint32_t code) { code_[s] = static_cast<uint16_t>(code); });
 }
 
 Status BuildPrefixTable(const std::array<uint8_t, 256>& lengths, PrefixTable& table) {
+  // One pass over the symbols counts the lengths; the checks, the longest and the Kraft sum come
+  // from the counts (three passes over the symbols were half of building a small tile's tables).
+  const LengthCounts count = CountLengths(lengths);
+  if (count[kPrefixCodeBits + 1] > 0) {
+    const uint8_t len = *std::max_element(lengths.begin(), lengths.end());
+    return Corrupt("prefix code length " + std::to_string(len) + " exceeds 12");
+  }
   uint32_t kraft = 0;  // in 2^-kPrefixCodeBits
-  for (uint8_t len : lengths) {
-    if (len > kPrefixCodeBits) return Corrupt("prefix code length " + std::to_string(len) + " exceeds 12");
-    if (len > 0) kraft += 1u << (kPrefixCodeBits - len);
+  table.bits = 0;
+  for (int len = 1; len <= kPrefixCodeBits; ++len) {
+    kraft += count[len] << (kPrefixCodeBits - len);
+    if (count[len] > 0) table.bits = len;
   }
   if (kraft > (1u << kPrefixCodeBits)) return Corrupt("prefix code lengths over-subscribe the code space");
-  table.bits = *std::max_element(lengths.begin(), lengths.end());
   table.entries.assign(size_t{1} << table.bits, 0);
-  CanonicalCodes(lengths, [&](int s, int len, uint32_t code) {
+  CanonicalCodes(lengths, count, [&](int s, int len, uint32_t code) {
     const uint32_t first = code << (table.bits - len);
     std::fill_n(table.entries.begin() + first, size_t{1} << (table.bits - len), static_cast<uint16_t>(len << 8 | s));
   });
