@@ -93,6 +93,10 @@ TEST(Tiler, TilesDecodeBackToEveryLevelAndFormAnOctree) {
       EXPECT_EQ(file->geometry[0], options.geometry_version) << "tiles take the faster-decoding geometry stream";
       ASSERT_GE(file->colors.size(), 2u);
       EXPECT_EQ(file->colors[1], kFixedWeightCodesVersion) << "and the faster-decoding block color stream";
+      EXPECT_EQ(file->colors[0], kVoxelColorsOnly | static_cast<uint8_t>(ColorCodec::kVariableRate)) << "voxel colors only";
+      for (const char* scan_wide : {"source", "crs", "grid_bounds"}) {
+        EXPECT_FALSE(file->meta.contains(scan_wide)) << scan_wide << ": the dataset's description carries it once";
+      }
       auto decoded = DecodePdag(*file);
       ASSERT_TRUE(decoded.ok()) << decoded.status().ToString();
       EXPECT_EQ(file->meta["tile"]["level"], level);

@@ -132,6 +132,10 @@ StatusOr<TileSet> BuildTiles(const VoxelGrid& finest, const ScanInfo& scan, cons
       return;
     }
     if (encoded->colors.max_mse > 0) encoded_hint[t] = encoded->colors.max_mse;
+    // A tile's metadata is what placing and decoding it needs; the scan's (source, CRS, bounds) is
+    // the dataset description's, said once: in every tile it was a third of a small tile's bytes
+    // and a sixth of its decode (docs/benchmarks.md, "Tiles store the voxels' colors only").
+    for (const char* scan_wide : {"source", "crs", "grid_bounds"}) encoded->file.meta.erase(scan_wide);
     encoded->file.meta["tile"] = {{"level", p.key.level}, {"x", p.key.x}, {"y", p.key.y}, {"z", p.key.z}};
     set.tiles[t] = {p.key, p.end - p.first, SerializePdag(encoded->file)};
     const uint64_t finished = ++done;
